@@ -1,0 +1,30 @@
+# airsim-mapper: the two user commands are `make demo` and `make test`; both set up what is missing.
+SHELL := /bin/bash
+PY := .venv/bin/python
+DEMO_SECONDS ?= 30
+SOAK_SECONDS ?= 600
+
+.PHONY: setup test lint demo bench soak clean
+
+setup:
+	@bash tools/setup.sh
+
+test: setup
+	@$(PY) -m ruff check .
+	@$(PY) -m pytest -q
+
+lint: setup
+	@$(PY) -m ruff check .
+	@$(PY) -m ruff format --check .
+
+demo: setup
+	@DEMO_SECONDS=$(DEMO_SECONDS) $(PY) -m airsim_mapper.demo
+
+bench: setup
+	@$(PY) -m airsim_mapper.bench
+
+soak: setup
+	@SOAK_SECONDS=$(SOAK_SECONDS) $(PY) -m airsim_mapper.soak
+
+clean:
+	rm -rf .venv out bench/results.json .pytest_cache .ruff_cache
