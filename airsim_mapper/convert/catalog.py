@@ -1,0 +1,227 @@
+"""The converter catalogue: every converter a mapping may name, with what it fits.
+
+Pure data, importable without ROS, so that mapping validation can check a rule's converter against its
+ROS type and direction. The implementation of each converter lives in the module named here and is
+looked up by `airsim_mapper.convert.registry` at run time.
+
+Contract of an implementation (see registry.py):
+- sim_to_ros: ``fn(msg: dict, ctx: ConvertContext) -> ROS message`` (or None to publish nothing)
+- ros_to_sim: ``fn(ros_msg, ctx: ConvertContext) -> dict`` (sim topic message or service params)
+Converters raise ``ConversionError`` (airsim_mapper.convert.errors) for malformed input, nothing else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+SIM_TO_ROS = "sim_to_ros"
+ROS_TO_SIM = "ros_to_sim"
+
+
+@dataclass(frozen=True)
+class ConverterInfo:
+    name: str
+    direction: str  # SIM_TO_ROS or ROS_TO_SIM
+    ros_types: tuple[str, ...]  # ROS message (or service) types it produces / consumes
+    sim_kind: str  # "topic" (sim topic) or "service" (sim service method) or "node" (handled by the engine)
+    module: str  # module in airsim_mapper.convert holding the function
+    function: str
+    summary: str
+
+
+def _c(name, direction, ros_types, sim_kind, module, function, summary) -> ConverterInfo:
+    return ConverterInfo(name, direction, tuple(ros_types), sim_kind, module, function, summary)
+
+
+CONVERTERS: dict[str, ConverterInfo] = {
+    info.name: info
+    for info in (
+        # --- simulator -> ROS ----------------------------------------------------------------
+        _c(
+            "pose",
+            SIM_TO_ROS,
+            ["geometry_msgs/PoseStamped"],
+            "topic",
+            "pose",
+            "pose_stamped",
+            "sim PoseStamped (robot actual_pose) -> PoseStamped; with tf, also the robot's transform",
+        ),
+        _c(
+            "camera_pose",
+            SIM_TO_ROS,
+            ["geometry_msgs/PoseStamped"],
+            "topic",
+            "pose",
+            "camera_pose",
+            "robot actual_pose composed with the camera mount (and any camera pose command) -> camera pose",
+        ),
+        _c(
+            "image",
+            SIM_TO_ROS,
+            ["sensor_msgs/Image"],
+            "topic",
+            "image",
+            "image",
+            "sim Image (BGR, PNG, 16FC1, 16UC1, GRAY8) -> Image (bgr8, 32FC1 metres, mono8)",
+        ),
+        _c(
+            "camera_info",
+            SIM_TO_ROS,
+            ["sensor_msgs/CameraInfo"],
+            "topic",
+            "camera_info",
+            "camera_info",
+            "sim Image (for its size and stamp) + capture settings -> CameraInfo (plumb_bob, K, P from fov)",
+        ),
+        _c(
+            "pointcloud",
+            SIM_TO_ROS,
+            ["sensor_msgs/PointCloud2"],
+            "topic",
+            "pointcloud",
+            "pointcloud",
+            "sim Lidar -> PointCloud2 with x, y, z, intensity, segmentation",
+        ),
+        _c(
+            "radar_scan",
+            SIM_TO_ROS,
+            ["radar_msgs/RadarScan"],
+            "topic",
+            "radar",
+            "radar_scan",
+            "sim RadarDetection -> RadarScan (range, azimuth, elevation, doppler, amplitude dB from rcs)",
+        ),
+        _c(
+            "radar_tracks",
+            SIM_TO_ROS,
+            ["radar_msgs/RadarTracks"],
+            "topic",
+            "radar",
+            "radar_tracks",
+            "sim RadarTrack -> RadarTracks (uuid from id, position, velocity, acceleration)",
+        ),
+        _c(
+            "clock",
+            SIM_TO_ROS,
+            ["rosgraph_msgs/Clock"],
+            "topic",
+            "clock",
+            "clock",
+            "any stamped sim message -> Clock at its sim time",
+        ),
+        _c("imu", SIM_TO_ROS, ["sensor_msgs/Imu"], "topic", "instruments", "imu", "sim IMU -> Imu"),
+        _c(
+            "gps",
+            SIM_TO_ROS,
+            ["sensor_msgs/NavSatFix"],
+            "topic",
+            "instruments",
+            "gps",
+            "sim GPS -> NavSatFix",
+        ),
+        _c(
+            "barometer",
+            SIM_TO_ROS,
+            ["sensor_msgs/FluidPressure"],
+            "topic",
+            "instruments",
+            "barometer",
+            "sim Barometer -> FluidPressure (Pa)",
+        ),
+        _c(
+            "magnetometer",
+            SIM_TO_ROS,
+            ["sensor_msgs/MagneticField"],
+            "topic",
+            "instruments",
+            "magnetometer",
+            "sim Magnetometer (gauss) -> MagneticField (tesla)",
+        ),
+        _c(
+            "distance",
+            SIM_TO_ROS,
+            ["sensor_msgs/Range"],
+            "topic",
+            "instruments",
+            "distance",
+            "sim DistanceSensor -> Range",
+        ),
+        _c(
+            "battery",
+            SIM_TO_ROS,
+            ["sensor_msgs/BatteryState"],
+            "topic",
+            "instruments",
+            "battery",
+            "sim Battery -> BatteryState",
+        ),
+        _c(
+            "airspeed",
+            SIM_TO_ROS,
+            ["sensor_msgs/FluidPressure"],
+            "topic",
+            "instruments",
+            "airspeed",
+            "sim Airspeed (differential pressure) -> FluidPressure (Pa)",
+        ),
+        # --- ROS -> simulator ----------------------------------------------------------------
+        _c(
+            "cmd_vel",
+            ROS_TO_SIM,
+            ["geometry_msgs/Twist"],
+            "service",
+            "command",
+            "cmd_vel",
+            "Twist -> MoveByVelocityBodyFrame (or MoveByVelocity) params, with limits and a watchdog",
+        ),
+        _c(
+            "desired_pose",
+            ROS_TO_SIM,
+            ["geometry_msgs/PoseStamped"],
+            "topic",
+            "command",
+            "desired_pose",
+            "PoseStamped -> sim desired_pose message (robot teleport)",
+        ),
+        _c(
+            "camera_desired_pose",
+            ROS_TO_SIM,
+            ["geometry_msgs/PoseStamped"],
+            "service",
+            "command",
+            "camera_desired_pose",
+            "PoseStamped -> camera SetPose params with wait_for_pose_update",
+        ),
+        _c(
+            "load_scene",
+            ROS_TO_SIM,
+            ["std_msgs/String"],
+            "node",
+            "command",
+            "load_scene",
+            "String scene file name -> the engine loads it from --simconfigpath",
+        ),
+        _c(
+            "trigger",
+            ROS_TO_SIM,
+            ["std_srvs/Trigger", "std_srvs/Empty"],
+            "service",
+            "command",
+            "trigger",
+            "service request -> sim service call with the rule's fixed params; reply from its result",
+        ),
+        _c(
+            "set_bool",
+            ROS_TO_SIM,
+            ["std_srvs/SetBool"],
+            "service",
+            "command",
+            "set_bool",
+            "SetBool request -> sim service call with the bool as the rule's param",
+        ),
+    )
+}
+
+
+def find(name: str) -> ConverterInfo | None:
+    return CONVERTERS.get(name)

@@ -1,0 +1,148 @@
+"""Rigid-body math shared by the bridge and the headless server (pure numpy, vectorised).
+
+Conventions: quaternions are numpy arrays in (w, x, y, z) order and rotate body -> world; positions are
+metres. The simulator's world frame is NED and its body frames are FRD.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
+
+
+class OriginError(ValueError):
+    """A config `origin` block could not be parsed."""
+
+
+def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product a*b (apply b, then a). Broadcasts over leading axes."""
+    aw, ax, ay, az = np.moveaxis(np.asarray(a, dtype=float), -1, 0)
+    bw, bx, by, bz = np.moveaxis(np.asarray(b, dtype=float), -1, 0)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    q = np.asarray(q, dtype=float)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_normalize(q: np.ndarray) -> np.ndarray:
+    q = np.asarray(q, dtype=float)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    return q / np.where(norm == 0.0, 1.0, norm)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix (3x3) of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = quat_normalize(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) with w >= 0 of a rotation matrix."""
+    m = np.asarray(m, dtype=float)
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+    q = quat_normalize(np.array(q))
+    return -q if q[0] < 0 else q
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate vectors v (..., 3) by the unit quaternion q."""
+    return np.asarray(v, dtype=float) @ quat_to_matrix(q).T
+
+
+def quat_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Quaternion of intrinsic Z-Y-X (yaw, then pitch, then roll) Euler angles, radians."""
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return np.array(
+        [
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+        ]
+    )
+
+
+def rpy_from_quat(q: np.ndarray) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) in radians of a unit quaternion, the inverse of quat_from_rpy."""
+    w, x, y, z = quat_normalize(q)
+    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
+def yaw_of(q: np.ndarray) -> float:
+    return rpy_from_quat(q)[2]
+
+
+def compose(parent_pos: np.ndarray, parent_q: np.ndarray, child_pos: np.ndarray, child_q: np.ndarray):
+    """World pose of a child given its pose relative to a parent: returns (position, quaternion)."""
+    position = np.asarray(parent_pos, dtype=float) + rotate(parent_q, child_pos)
+    return position, quat_normalize(quat_multiply(parent_q, child_q))
+
+
+def _three_floats(text: Any, key: str) -> tuple[float, float, float]:
+    if not isinstance(text, str):
+        raise OriginError(f"origin {key!r} must be a string of three numbers, got {text!r}")
+    parts = text.split()
+    if len(parts) != 3:
+        raise OriginError(f"origin {key!r} must hold three numbers, got {text!r}")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError as exc:
+        raise OriginError(f"origin {key!r} must hold three numbers, got {text!r}") from exc
+    if not all(math.isfinite(v) for v in values):
+        raise OriginError(f"origin {key!r} must hold finite numbers, got {text!r}")
+    return values  # type: ignore[return-value]
+
+
+def parse_origin(origin: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarray]:
+    """Position and quaternion of a scene/robot config `origin` ({xyz, rpy | rpy-deg}); identity if absent.
+
+    Raises OriginError for malformed values. (`geo-point` origins are handled by the caller.)
+    """
+    if not origin:
+        return np.zeros(3), IDENTITY_Q.copy()
+    position = np.array(_three_floats(origin["xyz"], "xyz")) if "xyz" in origin else np.zeros(3)
+    if "rpy-deg" in origin:
+        roll, pitch, yaw = (math.radians(v) for v in _three_floats(origin["rpy-deg"], "rpy-deg"))
+    elif "rpy" in origin:
+        roll, pitch, yaw = _three_floats(origin["rpy"], "rpy")
+    else:
+        roll = pitch = yaw = 0.0
+    return position, quat_from_rpy(roll, pitch, yaw)
