@@ -1,0 +1,117 @@
+"""Plain immutable values of the mapping language: options, rules, and the expanded bridges.
+
+`Mapping` is what the loader returns for a YAML file; `BridgeSpec` is one concrete bridge that expansion
+produces from a rule and a scene. Nothing here imports ROS or the simulator client.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping as MappingABC
+from dataclasses import dataclass, field
+from typing import Any
+
+SIM_TO_ROS = "sim_to_ros"
+ROS_TO_SIM = "ros_to_sim"
+
+# Domains a rule can expand over, and the template variables each provides.
+DOMAIN_VARIABLES: dict[str, tuple[str, ...]] = {
+    "node": ("node_name", "namespace"),
+    "scene": ("node_name", "namespace", "scene_name"),
+    "robot": ("node_name", "namespace", "scene_name", "robot_name"),
+    "camera": ("node_name", "namespace", "scene_name", "robot_name", "camera_name"),
+    "camera_capture": (
+        "node_name",
+        "namespace",
+        "scene_name",
+        "robot_name",
+        "camera_name",
+        "image_type",
+        "image_type_id",
+        "sim_image_type",
+    ),
+    "streaming_camera": ("node_name", "namespace", "scene_name", "robot_name", "camera_name"),
+    "lidar": ("node_name", "namespace", "scene_name", "robot_name", "lidar_name", "sensor_name"),
+    "radar": ("node_name", "namespace", "scene_name", "robot_name", "radar_name", "sensor_name"),
+    # one domain per other sensor type: imu, gps, barometer, magnetometer, distance_sensor, battery, airspeed
+    **{
+        kind: ("node_name", "namespace", "scene_name", "robot_name", "sensor_name")
+        for kind in ("imu", "gps", "barometer", "magnetometer", "distance_sensor", "battery", "airspeed")
+    },
+}
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Bounds applied to incoming commands (absent = unbounded)."""
+
+    max_linear_speed: float | None = None  # m/s, norm of the linear velocity
+    max_vertical_speed: float | None = None  # m/s, |z|
+    max_yaw_rate: float | None = None  # rad/s
+    on_violation: str = "clamp"  # "clamp" or "reject"
+
+
+@dataclass(frozen=True)
+class Options:
+    """Per-rule options; the mapping's `defaults` fill whatever a rule leaves out."""
+
+    queue_size: int = 1
+    latch: bool = False
+    lazy: bool = True
+    rate_limit_hz: float | None = None
+    stamp: str = "sim"  # "sim" (simulator time stamp) or "ros" (rospy.Time.now())
+    enabled: bool = True
+    watchdog_s: float | None = None  # ros_to_sim: act when no message arrives for this long
+    limits: Limits = field(default_factory=Limits)
+
+
+@dataclass(frozen=True)
+class TfSpec:
+    parent: str  # template
+    child: str  # template
+
+
+@dataclass(frozen=True)
+class Rule:
+    name: str
+    domain: str  # a key of DOMAIN_VARIABLES
+    direction: str  # SIM_TO_ROS or ROS_TO_SIM
+    sim: str | None  # sim topic path or service method template
+    ros: str | None  # ROS topic or service name template (None: tf only)
+    ros_type: str | None
+    converter: str
+    frame_id: str | None
+    tf: TfSpec | None
+    convention: str  # "ned" or "enu"
+    options: Options
+    params: MappingABC[str, Any]  # free-form converter parameters (e.g. body_frame, method params)
+    line: int = 0  # 1-based line of the rule in its file, for messages
+
+
+@dataclass(frozen=True)
+class Mapping:
+    version: int
+    image_types: MappingABC[int, str]  # image-type id -> <image_type> name
+    defaults: Options
+    rules: tuple[Rule, ...]
+    source: str = "<string>"  # file the mapping came from
+
+
+@dataclass(frozen=True)
+class BridgeSpec:
+    """One concrete bridge: a rule expanded for one element of the scene."""
+
+    name: str  # unique and stable, e.g. "camera_image[Drone1/DownCamera/scene_camera]"
+    rule: str
+    direction: str
+    converter: str
+    sim: str | None  # concrete sim topic path or service method
+    sim_kind: str  # "topic", "service" or "node" (from the converter catalogue)
+    ros: str | None  # concrete ROS topic or service name
+    ros_type: str | None
+    frame_id: str | None
+    tf: TfSpec | None  # concrete parent/child frame ids
+    convention: str
+    options: Options
+    params: MappingABC[str, Any]
+    variables: MappingABC[str, str]  # the template variables this bridge was expanded with
+    source: MappingABC[str, Any]  # the scene element it came from (capture setting, sensor config, ...)
