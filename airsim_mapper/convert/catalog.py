@@ -164,6 +164,15 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "airspeed",
             "sim Airspeed (differential pressure) -> FluidPressure (Pa)",
         ),
+        _c(
+            "streaming_image",
+            SIM_TO_ROS,
+            ["sensor_msgs/Image"],
+            "node",
+            "image",
+            "image",
+            "the active streaming camera's scene image (the engine follows switch_view)",
+        ),
         # --- ROS -> simulator ----------------------------------------------------------------
         _c(
             "cmd_vel",
@@ -218,6 +227,15 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "set_bool",
             "SetBool request -> sim service call with the bool as the rule's param",
+        ),
+        _c(
+            "switch_view",
+            ROS_TO_SIM,
+            ["std_srvs/Trigger"],
+            "node",
+            "command",
+            "trigger",
+            "Trigger -> SwitchStreamingView, and the streaming image follows the next camera",
         ),
     )
 }
