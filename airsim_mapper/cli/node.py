@@ -1,0 +1,119 @@
+"""projectairsim_node: the bridge as a ROS node (python, rosrun and roslaunch).
+
+Switches as the seed documents them (--address, --nodename, --simconfigpath, --servicesport,
+--topicsport), plus --mapping and --scene. An invalid mapping or scene stops the node with the
+validate-mapping errors and exit code 1, before anything connects.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import time
+from typing import Any
+
+from airsim_mapper.mapping.errors import ConfigError
+
+log = logging.getLogger("rosout.airsim_mapper.node")
+RETRY_MAX_S = 5.0
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    from airsim_mapper.wrapper import DEFAULT_MAPPING
+
+    parser = argparse.ArgumentParser(prog="projectairsim_node.py", description=__doc__.splitlines()[0])
+    parser.add_argument("--address", default="127.0.0.1", help="host running Project AirSim")
+    parser.add_argument(
+        "--nodename",
+        default=None,
+        help='node name (default: "projectairsim", made unique with rospy\'s anonymous flag)',
+    )
+    parser.add_argument("--simconfigpath", default="sim_config/", help="directory holding the scene configs")
+    parser.add_argument("--servicesport", type=int, default=8990, help="Project AirSim services port")
+    parser.add_argument("--topicsport", type=int, default=8989, help="Project AirSim pub-sub port")
+    parser.add_argument("--mapping", default=str(DEFAULT_MAPPING), help="mapping YAML file")
+    parser.add_argument("--scene", default=None, help="scene config file to load at start")
+    parser.add_argument("--namespace", default="", help="value of the <namespace> template variable")
+    return parser.parse_args(argv)
+
+
+def connect(address: str, topicsport: int, servicesport: int, is_shutdown) -> Any:
+    """Connect to the simulator, retrying with backoff until it answers or ROS shuts down."""
+    from projectairsim import ProjectAirSimClient
+
+    delay, attempt = 0.25, 0
+    while not is_shutdown():
+        attempt += 1
+        client = ProjectAirSimClient(address, topicsport, servicesport)
+        try:
+            client.connect()
+            return client
+        except Exception as exc:
+            for sock in (client.socket_topics, client.socket_services):
+                if sock is not None:
+                    sock.close()
+            log.warning(
+                "simulator at %s:%d/%d not reachable (%s); retry %d in %.1f s",
+                address,
+                topicsport,
+                servicesport,
+                type(exc).__name__,
+                attempt,
+                delay,
+            )
+            time.sleep(delay)
+            delay = min(delay * 2, RETRY_MAX_S)
+    return None
+
+
+def main(argv: list[str] | None = None) -> int:
+    import rospy
+
+    args = parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])
+    from airsim_mapper.cli.validate import format_table
+    from airsim_mapper.mapping.expand import expand
+    from airsim_mapper.mapping.loader import load_mapping
+    from airsim_mapper.scene import read_scene
+
+    node_name = args.nodename or "projectairsim"
+    try:
+        mapping = load_mapping(args.mapping)
+        if args.scene:
+            expand(mapping, read_scene(args.simconfigpath, args.scene), node_name, args.namespace)
+    except ConfigError as exc:
+        print(str(exc), file=sys.stderr)
+        return 1
+    except OSError as exc:
+        print(f"{args.mapping}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+
+    rospy.init_node(node_name, anonymous=args.nodename is None)
+    from airsim_mapper.wrapper import ProjectAirSimWrapper, redirect_client_log
+
+    redirect_client_log()
+    client = connect(args.address, args.topicsport, args.servicesport, rospy.is_shutdown)
+    if client is None:
+        return 0
+    wrapper = ProjectAirSimWrapper(
+        client,
+        sim_config_path=args.simconfigpath,
+        mapping=mapping,
+        node_name=rospy.get_name().lstrip("/"),
+        namespace=args.namespace,
+        disconnect_on_shutdown=True,  # this node made the client
+    )
+    try:
+        if args.scene:
+            wrapper.load_scene(args.scene)
+    except ConfigError as exc:
+        print(str(exc), file=sys.stderr)
+        rospy.signal_shutdown("invalid scene")
+        return 1
+    log.info("bridges:\n%s", format_table(wrapper.bridges))
+    rospy.spin()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

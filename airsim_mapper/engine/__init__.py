@@ -1,0 +1,1 @@
+"""The live engine: runs expanded bridges between the simulator client and ROS."""

@@ -1,0 +1,362 @@
+"""Runners for expanded bridges: each takes a BridgeSpec and wires sim link <-> converter <-> ROS link."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable, MutableMapping
+from dataclasses import dataclass
+from typing import Any
+
+import rospy
+
+from airsim_mapper.convert import registry
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
+from airsim_mapper.engine.sim_link import SimLink, SimLinkError
+from airsim_mapper.mapping.model import SIM_TO_ROS, BridgeSpec
+
+log = logging.getLogger("rosout.airsim_mapper.bridge")
+WARN_PERIOD_S = 5.0
+
+
+@dataclass
+class BridgeStats:
+    messages: int = 0  # converted and published / forwarded
+    errors: int = 0  # rejected or failed
+    last_stamp: Any = None  # header stamp (rospy.Time) of the last published message
+    last_time: float = 0.0  # time.monotonic() of the last message
+    last_error: str = ""
+
+
+class Throttled:
+    """A warning logger that says each bridge's problem at most once per period, with a count."""
+
+    def __init__(self, name: str, period: float = WARN_PERIOD_S) -> None:
+        self.name = name
+        self.period = period
+        self._last = -1e9
+        self._suppressed = 0
+
+    def warn(self, message: str) -> None:
+        now = time.monotonic()
+        if now - self._last < self.period:
+            self._suppressed += 1
+            return
+        extra = f" ({self._suppressed} more since last report)" if self._suppressed else ""
+        self._last, self._suppressed = now, 0
+        log.warning("%s: %s%s", self.name, message, extra)
+
+
+@dataclass
+class Services:
+    """What every runner needs from the engine."""
+
+    sim: SimLink
+    hub: StreamHub
+    tf: TfBroadcaster
+    shared: MutableMapping[Any, Any]
+    node_action: Callable[[BridgeSpec, dict], Any]  # load_scene and other engine-level actions
+
+
+def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
+    return ConvertContext(
+        frame_id=spec.frame_id or "",
+        convention=spec.convention,
+        stamp=spec.options.stamp,
+        now=rospy.Time.now,
+        params=spec.params,
+        source=spec.source,
+        variables=spec.variables,
+        options=spec.options,
+        shared=shared,
+    )
+
+
+class Bridge:
+    """Base: a spec, its stats and a throttled warning channel."""
+
+    def __init__(self, spec: BridgeSpec, services: Services) -> None:
+        self.spec = spec
+        self.services = services
+        self.stats = BridgeStats()
+        self.warn = Throttled(spec.name).warn
+        self.ctx = make_context(spec, services.shared)
+
+    def start(self) -> None:
+        raise NotImplementedError
+
+    def stop(self) -> None:
+        raise NotImplementedError
+
+    def fail(self, message: str) -> None:
+        self.stats.errors += 1
+        self.stats.last_error = message
+        self.warn(message)
+
+
+class SimToRos(Bridge):
+    """Sim topic -> converter -> ROS publisher (and/or tf). Lazy bridges follow their ROS subscribers."""
+
+    def __init__(self, spec: BridgeSpec, services: Services) -> None:
+        super().__init__(spec, services)
+        self.convert = registry.get(spec.converter)
+        self.publisher: rospy.Publisher | None = None
+        self._attached = False
+        self._stopped = False
+        self._lock = threading.Lock()
+        self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
+        self._last_publish = -1e9
+        self.topic = spec.sim
+
+    @property
+    def lazy(self) -> bool:
+        return self.spec.options.lazy and self.spec.ros is not None
+
+    def start(self) -> None:
+        spec = self.spec
+        if spec.ros is not None:
+            self.publisher = rospy.Publisher(
+                spec.ros,
+                message_class(spec.ros_type),
+                queue_size=spec.options.queue_size,
+                latch=spec.options.latch,
+                subscriber_listener=PeerListener(self._peers_changed) if self.lazy else None,
+            )
+        if self.lazy:
+            self._peers_changed()
+        else:
+            self._set_attached(True)
+
+    def _peers_changed(self) -> None:
+        publisher = self.publisher
+        if publisher is not None and not self._stopped:
+            self._set_attached(publisher.get_num_connections() > 0)
+
+    def _set_attached(self, attached: bool) -> None:
+        with self._lock:
+            if self._stopped and attached:
+                return
+            if attached == self._attached or self.topic is None:
+                return
+            self._attached = attached
+            if attached:
+                self.services.hub.attach(self.topic, self.handle)
+            else:
+                self.services.hub.detach(self.topic, self.handle)
+
+    def handle(self, message: Any) -> list | None:
+        """Convert one sim message, publish it; return the transforms it produces."""
+        now = time.monotonic()
+        if self._min_period and now - self._last_publish < self._min_period:
+            return None
+        try:
+            out = self.convert(message, self.ctx)
+        except ConversionError as exc:
+            self.fail(f"dropped a message from {self.topic}: {exc}")
+            return None
+        if out is None:
+            return None
+        self._last_publish = now
+        if self.publisher is not None:
+            self.publisher.publish(out)
+        self.stats.messages += 1
+        self.stats.last_time = now
+        header = getattr(out, "header", None)
+        if header is not None:
+            self.stats.last_stamp = header.stamp
+        if self.spec.tf is None:
+            return None
+        return [self._transform(out, message)]
+
+    def _transform(self, out: Any, message: Any) -> Any:
+        tf = self.spec.tf
+        if hasattr(out, "pose") and hasattr(out.pose, "position"):  # a PoseStamped output
+            return transform_from_pose(out, tf.parent, tf.child)
+        # Otherwise the sensor message carries its own world pose under "pose".
+        pose_msg = {"time_stamp": message.get("time_stamp", 0), **message["pose"]}
+        pose = registry.get("pose")(pose_msg, self.ctx)
+        return transform_from_pose(pose, tf.parent, tf.child)
+
+    def stop(self) -> None:
+        self._set_attached(False)
+        self._stopped = True
+        if self.publisher is not None:
+            self.publisher.unregister()
+
+
+class RosToSim(Bridge):
+    """ROS subscriber -> converter -> sim topic publish, sim service call, or an engine action."""
+
+    def __init__(self, spec: BridgeSpec, services: Services) -> None:
+        super().__init__(spec, services)
+        self.convert = registry.get(spec.converter)
+        self.subscriber: rospy.Subscriber | None = None
+        self.last_message = 0.0
+        self.moving = False  # a command was sent since the last watchdog stop
+        self.pending: Any = None
+
+    def start(self) -> None:
+        self.subscriber = rospy.Subscriber(
+            self.spec.ros,
+            message_class(self.spec.ros_type),
+            self.on_message,
+            queue_size=self.spec.options.queue_size,
+        )
+
+    def on_message(self, ros_msg: Any) -> None:
+        try:
+            params = self.convert(ros_msg, self.ctx)
+        except ConversionError as exc:
+            self.fail(f"rejected a message on {self.spec.ros}: {exc}")
+            return
+        spec = self.spec
+        self.last_message = time.monotonic()
+        try:
+            if spec.sim_kind == "topic":
+                self.services.sim.publish(spec.sim, params)
+                self.stats.messages += 1
+            elif spec.sim_kind == "service":
+                self.moving = spec.options.watchdog_s is not None
+                future = self.services.sim.call_async(spec.sim, params)
+                future.add_done_callback(lambda f, p=params: self._on_reply(f, p))
+            else:
+                self.services.node_action(spec, params)
+                self.stats.messages += 1
+        except Exception as exc:  # the node never dies from one bad message
+            self.fail(f"could not forward a message on {spec.ros}: {exc}")
+
+    def _on_reply(self, future: Any, params: dict) -> None:
+        try:
+            future.result()
+        except SimLinkError as exc:
+            self.fail(str(exc))
+            return
+        except Exception as exc:
+            self.fail(f"{self.spec.sim}: {exc}")
+            return
+        self.stats.messages += 1
+        if self.spec.converter == "camera_desired_pose":
+            self._remember_camera_pose(params)
+
+    def _remember_camera_pose(self, params: dict) -> None:
+        import numpy as np
+
+        pose = params["pose"]
+        t, r = pose["translation"], pose["rotation"]
+        key = ("camera_pose", self.spec.variables.get("robot_name"), self.spec.variables.get("camera_name"))
+        self.services.shared[key] = (
+            np.array([t["x"], t["y"], t["z"]], dtype=float),
+            np.array([r["w"], r["x"], r["y"], r["z"]], dtype=float),
+        )
+
+    def check_watchdog(self, now: float) -> None:
+        """Stop the robot when commands stopped arriving for `watchdog_s` seconds."""
+        timeout = self.spec.options.watchdog_s
+        if timeout is None or not self.moving or now - self.last_message < timeout:
+            return
+        self.moving = False
+        self.stop_robot(f"no command for {timeout:.1f} s")
+
+    def stop_robot(self, why: str) -> None:
+        method = self.spec.params.get("stop_method", "Hover")
+        robot_path = self.spec.sim.rsplit("/", 1)[0]
+        log.info("%s: %s: sending %s", self.spec.name, why, method)
+        self.services.sim.call_async(f"{robot_path}/{method}", {})
+
+    def stop(self) -> None:
+        if self.subscriber is not None:
+            self.subscriber.unregister()
+        if self.moving:
+            self.moving = False
+            try:
+                self.stop_robot("bridge stopping")
+            except Exception as exc:
+                log.warning("%s: could not stop the robot: %s", self.spec.name, exc)
+
+
+class RosService(Bridge):
+    """A ROS service (std_srvs) whose requests become sim service calls."""
+
+    def __init__(
+        self, spec: BridgeSpec, services: Services, after: Callable[[Any], None] | None = None
+    ) -> None:
+        super().__init__(spec, services)
+        self.convert = registry.get(spec.converter)
+        self.service: rospy.Service | None = None
+        self._after = after
+
+    def start(self) -> None:
+        srv_class = message_class(self.spec.ros_type, "srv")
+        self._response = srv_class._response_class
+        self.service = rospy.Service(self.spec.ros, srv_class, self.on_request)
+
+    def on_request(self, request: Any) -> Any:
+        response = self._response()
+        try:
+            params = self.convert(request, self.ctx)
+            result = self.services.sim.call(self.spec.sim, params)
+        except (ConversionError, SimLinkError) as exc:
+            self.fail(str(exc))
+            return _fill(response, False, str(exc))
+        self.stats.messages += 1
+        if self._after is not None:
+            self._after(result)
+        ok = result is not False and result is not None
+        return _fill(response, ok, "" if isinstance(result, bool) else str(result))
+
+    def stop(self) -> None:
+        if self.service is not None:
+            self.service.shutdown()
+
+
+def _fill(response: Any, success: bool, message: str) -> Any:
+    if hasattr(response, "success"):
+        response.success = success
+    if hasattr(response, "message"):
+        response.message = message
+    return response
+
+
+class StreamingImage(SimToRos):
+    """`/airsim_streaming_camera/image_raw`: the scene image of the active streaming camera."""
+
+    def __init__(self, spec: BridgeSpec, services: Services) -> None:
+        super().__init__(spec, services)
+        self.cameras = list(spec.source.get("cameras", []))
+        self.active = 0
+        self.topic = self.cameras[0]["sim"] if self.cameras else None
+
+    def next_camera(self) -> None:
+        if len(self.cameras) < 2:
+            return
+        with self._lock:
+            was_attached = self._attached
+        self._set_attached(False)
+        self.active = (self.active + 1) % len(self.cameras)
+        self.topic = self.cameras[self.active]["sim"]
+        if was_attached:
+            self._set_attached(True)
+
+
+def build(spec: BridgeSpec, services: Services, streaming: list[StreamingImage]) -> Bridge:
+    """The runner for a spec."""
+    if spec.converter == "streaming_image":
+        bridge = StreamingImage(spec, services)
+        streaming.append(bridge)
+        return bridge
+    if spec.direction == SIM_TO_ROS:
+        return SimToRos(spec, services)
+    if spec.ros_type is not None and spec.ros_type.startswith("std_srvs/"):
+        after = None
+        if spec.converter == "switch_view":
+
+            def after(_result: Any) -> None:
+                for bridge in streaming:
+                    bridge.next_camera()
+
+        return RosService(spec, services, after)
+    return RosToSim(spec, services)

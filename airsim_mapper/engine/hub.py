@@ -1,0 +1,52 @@
+"""One Stream per subscribed simulator topic, shared by every bridge that reads it."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+
+from airsim_mapper.engine.sim_link import SimLink
+from airsim_mapper.engine.streams import Handler, Stream
+
+
+class StreamHub:
+    """Attaches bridge handlers to topic streams; subscribes on the first, unsubscribes after the last."""
+
+    def __init__(self, sim: SimLink, on_transforms: Callable[[list], None]) -> None:
+        self._sim = sim
+        self._on_transforms = on_transforms
+        self._streams: dict[str, Stream] = {}
+        self._lock = threading.Lock()
+
+    def attach(self, topic: str, handler: Handler) -> None:
+        with self._lock:
+            stream = self._streams.get(topic)
+            if stream is not None:
+                stream.handlers = [*stream.handlers, handler]
+                return
+            stream = Stream(topic, self._on_transforms, [handler])
+            self._streams[topic] = stream
+            self._sim.subscribe(topic, stream.offer)
+
+    def detach(self, topic: str, handler: Handler) -> None:
+        with self._lock:
+            stream = self._streams.get(topic)
+            if stream is None:
+                return
+            stream.handlers = [h for h in stream.handlers if h is not handler]
+            if stream.handlers:
+                return
+            del self._streams[topic]
+        self._sim.unsubscribe(topic, stream.offer)
+        stream.stop()
+
+    def streams(self) -> dict[str, Stream]:
+        with self._lock:
+            return dict(self._streams)
+
+    def drop_all(self) -> None:
+        """Forget every stream without telling the server (its subscriptions are already gone)."""
+        with self._lock:
+            streams, self._streams = list(self._streams.values()), {}
+        for stream in streams:
+            stream.stop()

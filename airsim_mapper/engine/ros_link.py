@@ -1,0 +1,67 @@
+"""The ROS side of the engine: message classes, publishers with peer listeners, batched tf."""
+
+from __future__ import annotations
+
+import importlib
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import TransformStamped
+
+
+class RosTypeError(LookupError):
+    """A ROS message or service type could not be imported."""
+
+
+def message_class(ros_type: str, kind: str = "msg") -> type:
+    """`pkg/Name` -> the generated class from `pkg.msg` (or `pkg.srv`)."""
+    package, _, name = ros_type.partition("/")
+    try:
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+    except (ImportError, AttributeError) as exc:
+        raise RosTypeError(f"ROS {kind} type {ros_type!r} cannot be imported: {exc}") from exc
+
+
+class PeerListener(rospy.SubscribeListener):
+    """Calls `on_change` whenever a subscriber connects to or leaves a publisher."""
+
+    def __init__(self, on_change: Callable[[], None]) -> None:
+        self._on_change = on_change
+
+    def peer_subscribe(self, topic_name: str, topic_publish: Any, peer_publish: Any) -> None:
+        self._on_change()
+
+    def peer_unsubscribe(self, topic_name: str, num_peers: int) -> None:
+        self._on_change()
+
+
+class TfBroadcaster:
+    """Sends a batch of transforms as one tf message; the first user creates the /tf publisher."""
+
+    def __init__(self) -> None:
+        self._broadcaster: tf2_ros.TransformBroadcaster | None = None
+        self._lock = threading.Lock()
+
+    def send(self, transforms: list[TransformStamped]) -> None:
+        if not transforms:
+            return
+        with self._lock:
+            if self._broadcaster is None:
+                self._broadcaster = tf2_ros.TransformBroadcaster()
+            self._broadcaster.sendTransform(transforms)
+
+
+def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:
+    """A TransformStamped parent -> child from a geometry_msgs/PoseStamped (same stamp)."""
+    t = TransformStamped()
+    t.header.stamp = pose_stamped.header.stamp
+    t.header.frame_id = parent
+    t.child_frame_id = child
+    p, q = pose_stamped.pose.position, pose_stamped.pose.orientation
+    t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = p.x, p.y, p.z
+    t.transform.rotation.x, t.transform.rotation.y = q.x, q.y
+    t.transform.rotation.z, t.transform.rotation.w = q.z, q.w
+    return t

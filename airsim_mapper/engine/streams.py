@@ -1,0 +1,91 @@
+"""Per-topic workers: the client's receive thread only hands a message over, a worker converts it.
+
+Each subscribed simulator topic gets one `Stream`: a slot holding the newest message and a thread that
+takes it and runs the handlers of every bridge fed by that topic. A message that arrives while the previous
+one is still waiting replaces it (drop-oldest, depth 1) and is counted, so a slow image conversion never
+delays pose, tf or commands, and never builds a backlog.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+log = logging.getLogger("rosout.airsim_mapper.streams")
+
+# A handler converts and publishes one message; it may return transforms to broadcast. The transforms of
+# all handlers of one message go out together, as one tf message.
+Handler = Callable[[Any], "list | None"]
+
+
+@dataclass
+class StreamStats:
+    received: int = 0
+    dropped: int = 0
+    handled: int = 0
+    errors: int = 0
+    last_receive: float = 0.0  # time.monotonic() of the newest message
+
+
+@dataclass
+class Stream:
+    """The latest-message slot and worker thread of one simulator topic."""
+
+    topic: str
+    on_transforms: Callable[[list], None] | None = None
+    handlers: list[Handler] = field(default_factory=list)
+    stats: StreamStats = field(default_factory=StreamStats)
+
+    def __post_init__(self) -> None:
+        self._cond = threading.Condition()
+        self._pending: Any = None
+        self._has_pending = False
+        self._running = True
+        self._thread = threading.Thread(target=self._work, name=f"stream:{self.topic}", daemon=True)
+        self._thread.start()
+
+    def offer(self, _topic_info: Any, message: Any) -> None:
+        """Client receive-thread callback: store the message and wake the worker. Never blocks or raises."""
+        with self._cond:
+            self.stats.received += 1
+            self.stats.last_receive = time.monotonic()
+            if self._has_pending:
+                self.stats.dropped += 1
+            self._pending = message
+            self._has_pending = True
+            self._cond.notify()
+
+    def _work(self) -> None:
+        while True:
+            with self._cond:
+                while self._running and not self._has_pending:
+                    self._cond.wait()
+                if not self._running:
+                    return
+                message, self._pending, self._has_pending = self._pending, None, False
+                handlers = list(self.handlers)
+            transforms: list = []
+            for handler in handlers:
+                try:
+                    transforms.extend(handler(message) or ())
+                except Exception:  # a handler bug must not kill the stream
+                    self.stats.errors += 1
+                    log.exception("handler for %s failed", self.topic)
+            if transforms and self.on_transforms is not None:
+                try:
+                    self.on_transforms(transforms)
+                except Exception:
+                    self.stats.errors += 1
+                    log.exception("tf for %s failed", self.topic)
+            self.stats.handled += 1
+
+    def stop(self) -> None:
+        with self._cond:
+            self._running = False
+            self._cond.notify()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout=5)

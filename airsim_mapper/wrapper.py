@@ -1,0 +1,120 @@
+"""ProjectAirSimWrapper: the bridge as an object a mission script embeds (the seed's public API).
+
+Call `rospy.init_node` first. The wrapper either creates its own client (kept in `projectairsim_client`
+and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
+a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Any
+
+import rospy
+
+from airsim_mapper.engine.engine import Engine
+from airsim_mapper.mapping.loader import load_mapping
+from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.scene import Scene, scene_from_config
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_MAPPING = ROOT / "mappings" / "default.yaml"
+log = logging.getLogger("rosout.airsim_mapper")
+
+
+class WrapperError(RuntimeError):
+    """The wrapper cannot do what was asked (the message says why)."""
+
+
+def redirect_client_log() -> None:
+    """Send the projectairsim client's log records to `rosout.projectairsim` (console and /rosout)."""
+    from projectairsim.utils import projectairsim_log
+
+    client_log = projectairsim_log()
+    if any(getattr(f, "airsim_mapper", False) for f in client_log.filters):
+        return
+
+    def _redirect(record: logging.LogRecord) -> bool:
+        logging.getLogger("rosout.projectairsim").handle(record)
+        return False
+
+    _redirect.airsim_mapper = True  # type: ignore[attr-defined]
+    client_log.addFilter(_redirect)
+
+
+class ProjectAirSimWrapper:
+    """Runs the bridge for a mapping on a Project AirSim client, in the calling ROS node."""
+
+    def __init__(
+        self,
+        client: Any = None,
+        *,
+        address: str = "127.0.0.1",
+        topicsport: int = 8989,
+        servicesport: int = 8990,
+        sim_config_path: str | Path = "sim_config/",
+        mapping: Mapping | str | Path = DEFAULT_MAPPING,
+        scene: str | None = None,
+        node_name: str | None = None,
+        namespace: str = "",
+        disconnect_on_shutdown: bool | None = None,
+    ) -> None:
+        redirect_client_log()
+        self.mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
+        self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown
+        if client is None:
+            from projectairsim import ProjectAirSimClient
+
+            client = ProjectAirSimClient(address, topicsport, servicesport)
+            client.connect()
+        self.projectairsim_client = client
+        self.sim_config_path = str(sim_config_path)
+        name = node_name if node_name is not None else rospy.get_name().lstrip("/")
+        self.engine = Engine(client, self.mapping, self.sim_config_path, name, namespace)
+        self._closed = False
+        rospy.on_shutdown(self.shutdown)
+        if scene:
+            self.engine.load_scene(scene)
+
+    @property
+    def bridges(self) -> list[Any]:
+        return [bridge.spec for bridge in self.engine.bridges.values()]
+
+    @property
+    def scene(self) -> Scene | None:
+        return self.engine.scene
+
+    def load_scene(self, scene_file: str) -> Scene:
+        """Load a scene file from `sim_config_path` into the simulator and bridge it."""
+        return self.engine.load_scene(scene_file)
+
+    def update_topics(self, world: Any = None) -> None:
+        """Re-bridge after a mission script loaded a scene with `World(...)` on the shared client.
+
+        Pass that World; without it the wrapper re-bridges the scene it knows, if the simulator's topic
+        catalogue still belongs to it.
+        """
+        if world is not None:
+            config = world.get_configuration()
+            if not config:
+                raise WrapperError(
+                    "update_topics: the World has no scene configuration (built without a scene)"
+                )
+            scene_file = Path(getattr(world, "scene_config_path", "") or "").name
+            scene = scene_from_config(config, scene_file, self.sim_config_path)
+        else:
+            scene = self.engine.scene
+            if scene is None or not any(
+                p.startswith(f"/Sim/{scene.name}/") for p in self.projectairsim_client.topics
+            ):
+                raise WrapperError("update_topics: pass the World the mission script loaded")
+        self.engine.adopt(scene, world)
+
+    def shutdown(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self.engine.shutdown()
+        if self._owns_client:
+            self.projectairsim_client.disconnect()
