@@ -85,6 +85,7 @@ class Rule:
     options: Options
     params: MappingABC[str, Any]  # free-form converter parameters (e.g. body_frame, method params)
     line: int = 0  # 1-based line of the rule in its file, for messages
+    ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)
 
 
 @dataclass(frozen=True)
@@ -115,3 +116,4 @@ class BridgeSpec:
     params: MappingABC[str, Any]
     variables: MappingABC[str, str]  # the template variables this bridge was expanded with
     source: MappingABC[str, Any]  # the scene element it came from (capture setting, sensor config, ...)
+    ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)

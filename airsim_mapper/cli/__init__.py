@@ -1,0 +1,3 @@
+"""Command-line entry points."""
+
+from __future__ import annotations

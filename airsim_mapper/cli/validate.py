@@ -1,0 +1,75 @@
+"""validate-mapping: check a mapping offline and, with --scene, show the bridges it makes.
+
+Exit status: 0 valid, 1 the mapping or scene is invalid (every problem on stderr as FILE:LINE:COL: message),
+2 usage errors or unreadable files.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+from airsim_mapper.mapping.errors import ConfigError
+from airsim_mapper.mapping.model import BridgeSpec
+from airsim_mapper.mapping.pipeline import load_and_expand
+from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
+
+__all__ = ["format_table", "load_and_expand", "main"]
+
+EXIT_OK, EXIT_INVALID, EXIT_USAGE = 0, 1, 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="validate-mapping",
+        description="Validate an airsim-mapper mapping YAML (and expand it over a scene).",
+    )
+    parser.add_argument("mapping", help="the mapping YAML file, e.g. mappings/default.yaml")
+    parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
+    parser.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
+    parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
+    parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
+    parser.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    return parser
+
+
+def _print_bridges(bridges: Sequence[BridgeSpec], fmt: str) -> None:
+    if fmt == "json":
+        print(json.dumps([bridge_row(b) for b in bridges], indent=2))
+    else:
+        print(format_table(bridges))
+        print(f"\n{len(bridges)} bridges")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
+    try:
+        args = _parser().parse_args(argv)
+    except SystemExit as stop:  # argparse has printed the usage message
+        return EXIT_OK if stop.code == 0 else EXIT_USAGE
+    try:
+        if args.scene is None:
+            from airsim_mapper.mapping.loader import load_mapping
+
+            mapping = load_mapping(args.mapping)
+            rows = [rule_row(rule) for rule in mapping.rules]
+            if args.format == "json":
+                print(json.dumps(rows, indent=2))
+            else:
+                print(format_rows(rows))
+                print(f"\n{args.mapping}: valid, {len(rows)} rules")
+            return EXIT_OK
+        _, _, bridges = load_and_expand(
+            args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace
+        )
+    except ConfigError as err:
+        print(str(err), file=sys.stderr)
+        return EXIT_USAGE if err.unreadable else EXIT_INVALID
+    _print_bridges(bridges, args.format)
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())

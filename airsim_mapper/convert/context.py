@@ -1,0 +1,54 @@
+"""The per-bridge context every converter receives alongside the message."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, MutableMapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from airsim_mapper.convert.errors import ContextError
+
+NED = "ned"
+ENU = "enu"
+CONVENTIONS = (NED, ENU)
+STAMP_SIM = "sim"
+STAMP_ROS = "ros"
+STAMPS = (STAMP_SIM, STAMP_ROS)
+
+
+@dataclass(frozen=True)
+class ConvertContext:
+    """What a converter needs besides the message itself.
+
+    - frame_id: header.frame_id to set ("" = none).
+    - convention: "ned" passes the simulator's NED/FRD data through; "enu" converts to REP-103
+      (world ENU, body FLU).
+    - stamp: "sim" stamps headers with the sim message's ``time_stamp`` (int ns); "ros" with ``now()``.
+    - now: returns a rospy.Time; used when stamp == "ros" (rospy.Time.now when None).
+    - params: the rule's free-form converter parameters.
+    - source: the scene element (capture setting + "camera_origin", sensor config, robot actor).
+    - variables: the template variables of the bridge (robot_name, camera_name, ...).
+    - options: the rule's airsim_mapper.mapping.model.Options (command limits, watchdog).
+    - shared: engine-wide mutable state, e.g. camera pose overrides keyed
+      ``("camera_pose", robot_name, camera_name)``.
+    """
+
+    frame_id: str = ""
+    convention: str = NED
+    stamp: str = STAMP_SIM
+    now: Callable[[], Any] | None = None
+    params: Mapping[str, Any] = field(default_factory=dict)
+    source: Mapping[str, Any] = field(default_factory=dict)
+    variables: Mapping[str, str] = field(default_factory=dict)
+    options: Any = None
+    shared: MutableMapping[Any, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.convention not in CONVENTIONS:
+            raise ContextError(f"convention must be one of {CONVENTIONS}, got {self.convention!r}")
+        if self.stamp not in STAMPS:
+            raise ContextError(f"stamp must be one of {STAMPS}, got {self.stamp!r}")
+
+    @property
+    def enu(self) -> bool:
+        return self.convention == ENU

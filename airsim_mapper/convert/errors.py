@@ -1,0 +1,25 @@
+"""Errors raised by converters and by the converter registry."""
+
+from __future__ import annotations
+
+
+class ConversionError(ValueError):
+    """A message could not be converted: missing keys, wrong sizes, non-finite values, unknown encodings.
+
+    The message names the offending field, e.g.
+    ``"image: data has 100 bytes, expected 921600 for 640x480 BGR"``.
+    """
+
+
+class ConverterNotFound(LookupError):
+    """No converter of that name exists in the catalogue."""
+
+    def __init__(self, name: str, suggestions: list[str]) -> None:
+        hint = f"; did you mean {' or '.join(repr(s) for s in suggestions)}?" if suggestions else ""
+        super().__init__(f"unknown converter {name!r}{hint}")
+        self.name = name
+        self.suggestions = suggestions
+
+
+class ContextError(ValueError):
+    """A ConvertContext was built with an invalid option value."""

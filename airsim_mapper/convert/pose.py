@@ -1,0 +1,78 @@
+"""Robot and camera poses: sim PoseStamped -> geometry_msgs/PoseStamped (NED, or ENU/FLU per REP-103)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
+
+from airsim_mapper.convert import frames, sim_fields
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.stamps import header
+from airsim_mapper.geometry import OriginError, compose, parse_origin
+
+CAMERA_POSE_KEY = "camera_pose"
+
+
+def ros_pose(position: np.ndarray, q_wxyz: np.ndarray) -> Pose:
+    """geometry_msgs/Pose of a position and a (w, x, y, z) quaternion."""
+    x, y, z = (float(v) for v in position)
+    w, qx, qy, qz = (float(v) for v in q_wxyz)
+    return Pose(position=Point(x, y, z), orientation=Quaternion(qx, qy, qz, w))
+
+
+def world_pose(position: np.ndarray, q_ned_frd: np.ndarray, ctx: ConvertContext) -> Pose:
+    """A world NED/FRD pose as a ROS Pose in the context's convention."""
+    if ctx.enu:
+        return ros_pose(frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q_ned_frd))
+    return ros_pose(position, q_ned_frd)
+
+
+@sim_fields.converter("pose")
+def pose_stamped(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
+    """sim PoseStamped {time_stamp, position, orientation} -> geometry_msgs/PoseStamped."""
+    position, q = sim_fields.pose(msg)
+    return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
+
+
+def camera_pose_key(robot_name: str | None, camera_name: str | None) -> tuple[str, Any, Any]:
+    """The ctx.shared key under which the engine stores a camera's commanded pose."""
+    return (CAMERA_POSE_KEY, robot_name, camera_name)
+
+
+def camera_pose_override(set_pose_params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """(position, q_wxyz) relative to the robot (FRD) from camera_desired_pose's SetPose params.
+
+    The engine stores this in ctx.shared[camera_pose_key(robot, camera)] after a successful SetPose.
+    """
+    pose = set_pose_params["pose"]
+    t, r = pose["translation"], pose["rotation"]
+    return np.array([t["x"], t["y"], t["z"]], dtype=float), np.array(
+        [r["w"], r["x"], r["y"], r["z"]], dtype=float
+    )
+
+
+def camera_mount(ctx: ConvertContext) -> tuple[np.ndarray, np.ndarray]:
+    """The camera's pose relative to its robot (NED/FRD): a commanded override, else the config origin."""
+    key = camera_pose_key(ctx.variables.get("robot_name"), ctx.variables.get("camera_name"))
+    override = ctx.shared.get(key)
+    if override is not None:
+        position, q = override
+        return np.asarray(position, dtype=float), np.asarray(q, dtype=float)
+    origin = ctx.source.get("camera_origin")
+    try:
+        return parse_origin(origin)
+    except (OriginError, TypeError, AttributeError) as exc:
+        raise ConversionError(f"camera_origin: {exc}") from exc
+
+
+@sim_fields.converter("camera_pose")
+def camera_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
+    """The ROBOT's sim PoseStamped composed with the camera mount -> the camera's world PoseStamped."""
+    robot_position, robot_q = sim_fields.pose(msg)
+    mount_position, mount_q = camera_mount(ctx)
+    position, q = compose(robot_position, robot_q, mount_position, mount_q)
+    return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))

@@ -1,0 +1,97 @@
+"""Checked access to fields of simulator messages (msgpack maps) and ROS messages.
+
+Every helper raises ConversionError naming the field; `converter` is a safety net that turns any other
+error a malformed message could still provoke into a ConversionError, so converters honour their contract.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
+
+import numpy as np
+
+from airsim_mapper.convert.errors import ConversionError
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+_WRAPPED = (KeyError, TypeError, ValueError, IndexError, AttributeError, OverflowError)
+
+
+def converter(name: str) -> Callable[[F], F]:
+    """Decorate a converter so that only ConversionError escapes it (prefixed with the converter name)."""
+
+    def wrap(fn: F) -> F:
+        @functools.wraps(fn)
+        def run(msg: Any, ctx: Any) -> Any:
+            try:
+                return fn(msg, ctx)
+            except ConversionError as exc:
+                text = str(exc)
+                raise (exc if text.startswith(f"{name}:") else ConversionError(f"{name}: {text}")) from None
+            except _WRAPPED as exc:
+                raise ConversionError(f"{name}: malformed message ({type(exc).__name__}: {exc})") from exc
+
+        return run  # type: ignore[return-value]
+
+    return wrap
+
+
+def as_map(value: Any, where: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise ConversionError(f"{where} must be a map, got {type(value).__name__}")
+    return value
+
+
+def field(msg: Any, key: str, where: str = "message") -> Any:
+    """``msg[key]`` of a map, or ConversionError naming the missing key."""
+    msg = as_map(msg, where)
+    if key not in msg:
+        raise ConversionError(f"{where} has no {key!r}")
+    return msg[key]
+
+
+def number(value: Any, where: str, finite: bool = True) -> float:
+    """A real number (int or float, not bool); finite unless told otherwise."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ConversionError(f"{where} must be a number, got {value!r}")
+    result = float(value)
+    if finite and not math.isfinite(result):
+        raise ConversionError(f"{where} must be finite, got {result}")
+    return result
+
+
+def integer(value: Any, where: str) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ConversionError(f"{where} must be an integer, got {value!r}")
+    return int(value)
+
+
+def number_field(msg: Any, key: str, where: str = "message", finite: bool = True) -> float:
+    return number(field(msg, key, where), f"{where}.{key}" if where != "message" else key, finite)
+
+
+def vector3(msg: Any, key: str, where: str = "message") -> np.ndarray:
+    """A sim Vector3 ``{x, y, z}`` as a float array (finite)."""
+    name = key if where == "message" else f"{where}.{key}"
+    value = as_map(field(msg, key, where), name)
+    return np.array([number_field(value, axis, name) for axis in ("x", "y", "z")])
+
+
+def quaternion(msg: Any, key: str, where: str = "message") -> np.ndarray:
+    """A sim Quaternion ``{w, x, y, z}`` as a (w, x, y, z) float array; finite and non-zero."""
+    name = key if where == "message" else f"{where}.{key}"
+    value = as_map(field(msg, key, where), name)
+    q = np.array([number_field(value, axis, name) for axis in ("w", "x", "y", "z")])
+    if not np.any(q):
+        raise ConversionError(f"{name} is a zero quaternion")
+    return q
+
+
+def pose(msg: Any, key: str | None = None, where: str = "message") -> tuple[np.ndarray, np.ndarray]:
+    """(position, quaternion) of a sim Pose ``{position, orientation}`` (``msg`` itself if key is None)."""
+    body = msg if key is None else as_map(field(msg, key, where), key)
+    name = where if key is None else key
+    return vector3(body, "position", name), quaternion(body, "orientation", name)

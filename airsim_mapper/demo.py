@@ -1,0 +1,300 @@
+"""`make demo`: roscore + headless server + bridge + hello mission, a live rate table, a picture and a bag.
+
+Everything runs as real processes on free ports; the demo itself is a ROS node that watches every
+topic the bridge publishes. At the end it writes out/demo.png and out/demo.bag and stops what it started.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+OUT = ROOT / "out"
+BAG_SECONDS = 3
+BAG_EXCLUDE = "(.*/Chase/.*)|(/airsim_streaming_camera/.*)"
+ROBOT, CAMERA, LIDAR = "Drone1", "DownCamera", "lidar1"
+
+
+class DemoError(RuntimeError):
+    """The demo could not run (the message says which part failed)."""
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+@dataclass
+class Child:
+    name: str
+    popen: subprocess.Popen
+    log: Path
+
+    def stop(self) -> None:
+        if self.popen.poll() is None:
+            try:
+                os.killpg(self.popen.pid, signal.SIGINT)
+                self.popen.wait(timeout=10)
+            except (subprocess.TimeoutExpired, ProcessLookupError):
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(self.popen.pid, signal.SIGKILL)
+
+
+@dataclass
+class Rates:
+    """Message arrival times per topic, for a rate over the last few seconds."""
+
+    window_s: float = 3.0
+    times: dict[str, deque] = field(default_factory=dict)
+    totals: dict[str, int] = field(default_factory=dict)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def tick(self, topic: str) -> None:
+        now = time.monotonic()
+        with self.lock:
+            self.times.setdefault(topic, deque(maxlen=2000)).append(now)
+            self.totals[topic] = self.totals.get(topic, 0) + 1
+
+    def table(self, types: dict[str, str]) -> str:
+        now = time.monotonic()
+        rows = []
+        with self.lock:
+            for topic in sorted(types):
+                stamps = [t for t in self.times.get(topic, ()) if now - t <= self.window_s]
+                rate = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 1 else 0.0
+                rows.append((topic, types[topic], rate, self.totals.get(topic, 0)))
+        width = max((len(r[0]) for r in rows), default=10)
+        lines = [f"{'topic':<{width}}  {'type':<28} {'rate Hz':>8} {'msgs':>7}"]
+        lines += [f"{t:<{width}}  {ty:<28} {r:8.1f} {n:7d}" for t, ty, r, n in rows]
+        return "\n".join(lines)
+
+
+class Demo:
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+        self.children: list[Child] = []
+        self.workdir = OUT / "demo_logs"
+        self.env = dict(os.environ)
+        self.rates = Rates()
+        self.latest: dict[str, object] = {}
+        self.track: list[tuple[float, float, float]] = []
+
+    def start(self, name: str, argv: list[str]) -> Child:
+        log = self.workdir / f"{name}.log"
+        with open(log, "wb") as out:
+            popen = subprocess.Popen(
+                argv,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                env=self.env,
+                cwd=ROOT,
+                start_new_session=True,
+            )
+        child = Child(name, popen, log)
+        self.children.append(child)
+        return child
+
+    def wait_port(self, port: int, child: Child, timeout: float = 30.0) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if child.popen.poll() is not None:
+                raise DemoError(f"{child.name} exited early; see {child.log}")
+            with socket.socket() as sock:
+                if sock.connect_ex(("127.0.0.1", port)) == 0:
+                    return
+            time.sleep(0.1)
+        raise DemoError(f"{child.name} did not open port {port} within {timeout:.0f} s; see {child.log}")
+
+    def run(self) -> int:
+        OUT.mkdir(exist_ok=True)
+        self.workdir.mkdir(exist_ok=True)
+        ros_port, topics_port, services_port = free_port(), free_port(), free_port()
+        self.env.update(
+            ROS_MASTER_URI=f"http://localhost:{ros_port}",
+            ROS_HOSTNAME="localhost",
+            ROS_LOG_DIR=str(self.workdir / "ros"),
+            PYTHONUNBUFFERED="1",
+            PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+        )
+        os.environ.update({k: self.env[k] for k in ("ROS_MASTER_URI", "ROS_HOSTNAME", "ROS_LOG_DIR")})
+        print(f"demo: roscore on port {ros_port} (ROS_MASTER_URI={self.env['ROS_MASTER_URI']})")
+        master = self.start("roscore", ["roscore", "-p", str(ros_port)])
+        self.wait_port(ros_port, master)
+        print(f"demo: headless Project AirSim server on ports {topics_port}/{services_port}")
+        sim = self.start(
+            "simserver",
+            [
+                sys.executable,
+                "-m",
+                "airsim_mapper.simserver",
+                "--topicsport",
+                str(topics_port),
+                "--servicesport",
+                str(services_port),
+            ],
+        )
+        self.wait_port(services_port, sim)
+        self.wait_port(topics_port, sim)
+        print(f"demo: bridge + hello mission for {self.seconds:.0f} s (logs in {self.workdir})")
+        mission = self.start(
+            "hello_ros",
+            [
+                sys.executable,
+                str(ROOT / "scripts" / "hello_ros.py"),
+                "--topicsport",
+                str(topics_port),
+                "--servicesport",
+                str(services_port),
+                "--nodename",
+                "projectairsim",
+                "--seconds",
+                str(self.seconds + 10),
+            ],
+        )
+        return self.watch(mission)
+
+    def watch(self, mission: Child) -> int:
+        import rospy
+
+        rospy.init_node("demo_monitor", disable_signals=True)
+        types = self.wait_for_topics(mission)
+        self.subscribe(types)
+        started = time.monotonic()
+        bag_started = False
+        tty = sys.stdout.isatty()
+        while time.monotonic() - started < self.seconds:
+            if mission.popen.poll() is not None:
+                raise DemoError(f"the bridge/mission exited early; see {mission.log}")
+            if not bag_started and time.monotonic() - started > max(1.0, self.seconds - BAG_SECONDS - 2):
+                self.record_bag()
+                bag_started = True
+            time.sleep(2.0)
+            table = self.rates.table(types)
+            elapsed = time.monotonic() - started
+            if tty:
+                sys.stdout.write("\x1b[2J\x1b[H")
+            print(
+                f"demo: t = {elapsed:4.0f} s of {self.seconds:.0f} s, drone at {self.position()}\n{table}\n",
+                flush=True,
+            )
+        if not bag_started:
+            self.record_bag()
+        time.sleep(BAG_SECONDS + 1)
+        self.picture()
+        rospy.signal_shutdown("demo finished")
+        silent = [t for t in types if self.rates.totals.get(t, 0) == 0 and "desired_pose" not in t]
+        print(f"demo: wrote {OUT / 'demo.png'} and {OUT / 'demo.bag'}")
+        if silent:
+            print("demo: topics that carried no message: " + ", ".join(silent))
+        return 0
+
+    def wait_for_topics(self, mission: Child, timeout: float = 60.0) -> dict[str, str]:
+        import rospy
+
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if mission.popen.poll() is not None:
+                raise DemoError(f"the bridge/mission exited early; see {mission.log}")
+            topics = dict(rospy.get_published_topics())
+            if (
+                f"/airsim_node/{ROBOT}/actual_pose" in topics
+                and f"/airsim_node/{ROBOT}/{LIDAR}/lidar" in topics
+            ):
+                time.sleep(1.0)
+                return {
+                    t: ty
+                    for t, ty in rospy.get_published_topics()
+                    if t.startswith(("/airsim_node/", "/airsim_streaming_camera/", "/tf"))
+                }
+            time.sleep(0.5)
+        raise DemoError(f"the bridge's topics did not appear within {timeout:.0f} s; see {mission.log}")
+
+    def subscribe(self, types: dict[str, str]) -> None:
+        import rospy
+        from geometry_msgs.msg import PoseStamped
+        from sensor_msgs.msg import Image, PointCloud2
+
+        typed = {"sensor_msgs/Image": Image, "sensor_msgs/PointCloud2": PointCloud2}
+        for topic, ros_type in types.items():
+            keep = ros_type in typed and (f"/{CAMERA}/" in topic or topic.endswith("/lidar"))
+            cls = typed[ros_type] if keep else rospy.AnyMsg
+            rospy.Subscriber(topic, cls, self.on_message, callback_args=(topic, keep), queue_size=1)
+        rospy.Subscriber(f"/airsim_node/{ROBOT}/actual_pose", PoseStamped, self.on_pose, queue_size=10)
+
+    def on_message(self, msg: object, args: tuple[str, bool]) -> None:
+        topic, keep = args
+        self.rates.tick(topic)
+        if keep:
+            self.latest[topic] = msg
+
+    def on_pose(self, msg) -> None:
+        p = msg.pose.position
+        self.track.append((p.x, p.y, p.z))
+
+    def position(self) -> str:
+        if not self.track:
+            return "(no pose yet)"
+        x, y, z = self.track[-1]
+        return f"N {x:6.1f}  E {y:6.1f}  D {z:6.1f}"
+
+    def record_bag(self) -> None:
+        print(f"demo: recording {BAG_SECONDS} s to {OUT / 'demo.bag'}")
+        self.start(
+            "rosbag",
+            [
+                "rosbag",
+                "record",
+                "-q",
+                "-a",
+                "-x",
+                BAG_EXCLUDE,
+                f"--duration={BAG_SECONDS}",
+                "-O",
+                str(OUT / "demo.bag"),
+            ],
+        )
+
+    def picture(self) -> None:
+        from airsim_mapper.demo_picture import draw
+
+        draw(OUT / "demo.png", self.latest, np.array(self.track or [(0.0, 0.0, 0.0)]), ROBOT, CAMERA)
+
+    def stop(self) -> None:
+        for child in reversed(self.children):
+            child.stop()
+
+
+def main() -> int:
+    seconds = float(os.environ.get("DEMO_SECONDS", "30"))
+    if shutil.which("roscore") is None:
+        print("demo: roscore is missing: run `make setup`", file=sys.stderr)
+        return 1
+    demo = Demo(seconds)
+    try:
+        return demo.run()
+    except DemoError as exc:
+        print(f"demo: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        demo.stop()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,179 @@
+"""Semantic checks of mapping rules, beyond what the schema can say.
+
+- the converter exists (with a did-you-mean) and fits the rule's direction and ROS type;
+- the ROS type imports (`<pkg>.msg.<Name>` or `<pkg>.srv.<Name>`, imported lazily here only);
+- the sides a converter needs are present; a rule without a ROS name broadcasts tf;
+- templates are well formed and use only the variables of the rule's domain;
+- ROS names the templates generate are legal; no two rules produce the same ROS name; rule names are unique.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+from collections.abc import Sequence
+from functools import cache
+from typing import Any
+
+from airsim_mapper.convert import catalog
+from airsim_mapper.mapping import template
+from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
+from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.mapping.schema import did_you_mean
+from airsim_mapper.mapping.yamlmarks import Marks
+
+SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
+
+
+@cache
+def ros_type_kind(ros_type: str) -> str | None:
+    """'topic' when `pkg/Name` is a message, 'service' when it is a service, None when it does not import."""
+    package, _, name = ros_type.partition("/")
+    for module, kind in ((f"{package}.msg", "topic"), (f"{package}.srv", "service")):
+        try:
+            if hasattr(importlib.import_module(module), name):
+                return kind
+        except Exception:  # any import failure means "not importable"
+            continue
+    return None
+
+
+class _Checker:
+    def __init__(self, data: dict[str, Any], marks: Marks, file: str) -> None:
+        self.data = data
+        self.marks = marks
+        self.file = file
+        self.problems: list[Problem] = []
+
+    def add(self, path: tuple[Any, ...], message: str, at_key: bool = False) -> None:
+        line, col = self.marks.key(path) if at_key else self.marks.value(path)
+        self.problems.append(Problem(self.file, line, col, message))
+
+    def rule(self, rule: Rule, index: int) -> Rule:
+        base = ("rules", index)
+        info = catalog.find(rule.converter)
+        if info is None:
+            hint = did_you_mean(rule.converter, catalog.CONVERTERS)
+            self.add((*base, "converter"), f"rule '{rule.name}': unknown converter '{rule.converter}'{hint}")
+        else:
+            self._converter_fit(rule, info, base)
+        self._sides(rule, info, base)
+        self._templates(rule, base)
+        self._options(rule, base)
+        kind = "topic"
+        if rule.ros_type is not None:
+            found = ros_type_kind(rule.ros_type)
+            if found is None:
+                package, _, name = rule.ros_type.partition("/")
+                self.add(
+                    (*base, "type"),
+                    f"rule '{rule.name}': ROS type '{rule.ros_type}' does not import "
+                    f"(no {package}.msg.{name} nor {package}.srv.{name})",
+                )
+            else:
+                kind = found
+        return dataclasses.replace(rule, ros_kind=kind)
+
+    def _converter_fit(self, rule: Rule, info: catalog.ConverterInfo, base: tuple[Any, ...]) -> None:
+        if info.direction != rule.direction:
+            self.add(
+                (*base, "direction"),
+                f"rule '{rule.name}': converter '{info.name}' is {info.direction}, "
+                f"but the rule's direction is {rule.direction}",
+            )
+        if rule.ros_type is not None and rule.ros_type not in info.ros_types:
+            self.add(
+                (*base, "type"),
+                f"rule '{rule.name}': converter '{info.name}' handles {' or '.join(info.ros_types)}, "
+                f"not {rule.ros_type}",
+            )
+        if rule.sim is None and info.sim_kind in ("topic", "service"):
+            what = "a simulator topic" if info.sim_kind == "topic" else "a simulator service method"
+            self.add(base, f"rule '{rule.name}': 'sim' is required: converter '{info.name}' needs {what}")
+
+    def _sides(self, rule: Rule, info: catalog.ConverterInfo | None, base: tuple[Any, ...]) -> None:
+        if rule.ros is None:
+            if rule.tf is None or rule.direction != SIM_TO_ROS:
+                self.add(
+                    base,
+                    f"rule '{rule.name}': 'ros' is required (only a sim_to_ros rule with 'tf' may omit it)",
+                )
+        elif rule.ros_type is None:
+            self.add((*base, "ros"), f"rule '{rule.name}': 'type' is required when 'ros' is set")
+
+    def _templates(self, rule: Rule, base: tuple[Any, ...]) -> None:
+        allowed = DOMAIN_VARIABLES[rule.domain]
+        fields = {"sim": rule.sim, "ros": rule.ros, "frame_id": rule.frame_id}
+        if rule.tf is not None:
+            fields |= {"tf.parent": rule.tf.parent, "tf.child": rule.tf.child}
+        for key, text in fields.items():
+            if text is None:
+                continue
+            path = (*base, *key.split("."))
+            bad = template.malformed(text)
+            if bad:
+                self.add(path, f"rule '{rule.name}': {key} '{text}': {bad}")
+                continue
+            for name in template.variables(text):
+                if name not in allowed:
+                    hint = (
+                        did_you_mean(name, allowed) or f" (for_each {rule.domain} has: {', '.join(allowed)})"
+                    )
+                    self.add(
+                        path,
+                        f"rule '{rule.name}': unknown template variable <{name}> in {key} "
+                        f"for for_each {rule.domain}{hint}",
+                    )
+        if rule.ros is not None and not template.malformed(rule.ros):
+            sample = template.PLACEHOLDER.sub(
+                lambda m: "" if m.group(1) == "namespace" else SAMPLE_VALUE, rule.ros
+            )
+            why = ros_name_problem(sample)
+            if why:
+                self.add(
+                    (*base, "ros"), f"rule '{rule.name}': ros '{rule.ros}' is not a valid ROS name: {why}"
+                )
+
+    def _options(self, rule: Rule, base: tuple[Any, ...]) -> None:
+        raw = self.data["rules"][base[1]]
+        if rule.direction == SIM_TO_ROS:
+            for key in ("watchdog_s", "limits"):
+                if raw.get(key) is not None:
+                    self.add(
+                        (*base, key), f"rule '{rule.name}': {key} applies only to {ROS_TO_SIM} rules", True
+                    )
+
+    def across(self, rules: Sequence[Rule], indexes: Sequence[int]) -> None:
+        names: dict[str, int] = {}
+        outputs: dict[str, tuple[str, int]] = {}
+        for rule, index in zip(rules, indexes):
+            if rule.name in names:
+                first = self.marks.value(("rules", names[rule.name]))[0]
+                self.add(
+                    ("rules", index, "name"),
+                    f"duplicate rule name '{rule.name}' (first used at line {first})",
+                )
+            else:
+                names[rule.name] = index
+            if rule.ros is None or not rule.options.enabled:
+                continue
+            if rule.ros in outputs:
+                other, line = outputs[rule.ros]
+                self.add(
+                    ("rules", index, "ros"),
+                    f"rule '{rule.name}': ROS name '{rule.ros}' is also produced by rule '{other}' "
+                    f"(line {line})",
+                )
+            else:
+                outputs[rule.ros] = (rule.name, rule.line)
+
+
+def check_rules(
+    rules: Sequence[Rule], indexes: Sequence[int], data: dict[str, Any], marks: Marks, file: str
+) -> tuple[list[Problem], list[Rule]]:
+    """All semantic problems of `rules` (at `indexes` of data['rules']), and the rules with their ros_kind."""
+    checker = _Checker(data, marks, file)
+    checked = [checker.rule(rule, index) for rule, index in zip(rules, indexes)]
+    checker.across(checked, indexes)
+    return checker.problems, checked

@@ -1,0 +1,171 @@
+"""Expand mapping rules over a scene into concrete bridges: pure, deterministic, free of ROS imports.
+
+Order: rules in file order; within a rule, scene elements in scene order (robots, then their sensors, then
+capture settings). Domains:
+- node: once, named `<rule>[<node_name>]`; scene: once, `<rule>[<scene_name>]`;
+- robot: per robot, `<rule>[<robot>]`, source = the actor entry (name, origin, ...) without its robot-config;
+- camera: per enabled camera, `<rule>[<robot>/<camera>]`, source = the camera's sensor config;
+- camera_capture: per capture-enabled setting of an enabled camera, `<rule>[<robot>/<camera>/<image_type>]`,
+  source = the capture setting plus the camera mount under "camera_origin";
+- streaming_camera: once per scene when a capture-enabled image-type 0 setting has "streaming-enabled": true,
+  `<rule>[<scene_name>]`; robot_name/camera_name are the first streaming camera's, and source["cameras"] lists
+  every streaming camera as {"robot_name", "camera_name", "sim": its scene_camera topic path};
+- lidar, radar, imu, gps, barometer, magnetometer, distance_sensor, battery, airspeed: per enabled sensor of
+  that type, `<rule>[<robot>/<sensor>]`, source = the sensor config.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterator, Mapping
+from types import MappingProxyType
+from typing import Any
+
+from airsim_mapper.convert import catalog
+from airsim_mapper.mapping import template
+from airsim_mapper.mapping.errors import MappingError, Problem
+from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
+from airsim_mapper.mapping.model import Mapping as MappingDoc
+from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.scene import SIM_IMAGE_LEAVES, Scene
+
+Element = tuple[str, dict[str, str], dict[str, Any]]  # (name key, variables, source)
+
+
+def _robot_elements(scene: Scene, base: dict[str, str]) -> Iterator[Element]:
+    for robot in scene.robots:
+        yield robot.name, {**base, "robot_name": robot.name}, copy.deepcopy(dict(robot.actor))
+
+
+def _sensor_elements(scene: Scene, base: dict[str, str], kind: str) -> Iterator[Element]:
+    for robot in scene.robots:
+        for sensor in robot.enabled_sensors(kind):
+            variables = {**base, "robot_name": robot.name, "sensor_name": sensor.id}
+            if kind in ("camera", "lidar", "radar"):
+                variables[f"{kind}_name"] = sensor.id
+                if kind == "camera":
+                    del variables["sensor_name"]
+            source = copy.deepcopy(dict(sensor.config))
+            if kind == "camera":  # the mount, under the same key as for camera_capture elements
+                source["camera_origin"] = copy.deepcopy(sensor.config.get("origin"))
+            yield f"{robot.name}/{sensor.id}", variables, source
+
+
+def _capture_elements(
+    scene: Scene, base: dict[str, str], image_types: Mapping[int, str]
+) -> Iterator[Element]:
+    for robot in scene.robots:
+        for camera in robot.enabled_sensors("camera"):
+            for capture in camera.captures:
+                if not capture.capture_enabled or capture.image_type not in SIM_IMAGE_LEAVES:
+                    continue
+                name = image_types.get(capture.image_type, SIM_IMAGE_LEAVES[capture.image_type])
+                variables = {
+                    **base,
+                    "robot_name": robot.name,
+                    "camera_name": camera.id,
+                    "image_type": name,
+                    "image_type_id": str(capture.image_type),
+                    "sim_image_type": SIM_IMAGE_LEAVES[capture.image_type],
+                }
+                source = copy.deepcopy(dict(capture.settings))
+                source["camera_origin"] = copy.deepcopy(camera.config.get("origin"))
+                yield f"{robot.name}/{camera.id}/{name}", variables, source
+
+
+def _streaming_elements(scene: Scene, base: dict[str, str]) -> Iterator[Element]:
+    cameras = scene.streaming_cameras
+    if not cameras:
+        return
+    leaf = SIM_IMAGE_LEAVES[0]
+    listed = [
+        {
+            "robot_name": cam.robot_name,
+            "camera_name": cam.camera_name,
+            "sim": f"/Sim/{scene.name}/robots/{cam.robot_name}/sensors/{cam.camera_name}/{leaf}",
+        }
+        for cam in cameras
+    ]
+    first = cameras[0]
+    yield (
+        scene.name,
+        {**base, "robot_name": first.robot_name, "camera_name": first.camera_name},
+        {"cameras": listed},
+    )
+
+
+def elements(
+    rule: Rule, mapping: MappingDoc, scene: Scene, node_name: str, namespace: str
+) -> Iterator[Element]:
+    """The scene elements `rule` expands over, each with its name key, variables and source."""
+    base = {"node_name": node_name, "namespace": namespace}
+    if rule.domain == "node":
+        yield node_name, base, {}
+        return
+    base["scene_name"] = scene.name
+    if rule.domain == "scene":
+        yield scene.name, base, {"scene_name": scene.name, "file": scene.file}
+    elif rule.domain == "robot":
+        yield from _robot_elements(scene, base)
+    elif rule.domain == "camera_capture":
+        yield from _capture_elements(scene, base, mapping.image_types)
+    elif rule.domain == "streaming_camera":
+        yield from _streaming_elements(scene, base)
+    else:
+        yield from _sensor_elements(scene, base, rule.domain)
+
+
+def _bridge(rule: Rule, key: str, variables: dict[str, str], source: dict[str, Any]) -> BridgeSpec:
+    def fill(text: str | None) -> str | None:
+        return None if text is None else template.render(text, variables)
+
+    info = catalog.find(rule.converter)
+    return BridgeSpec(
+        name=f"{rule.name}[{key}]",
+        rule=rule.name,
+        direction=rule.direction,
+        converter=rule.converter,
+        sim=fill(rule.sim),
+        sim_kind=info.sim_kind if info else "topic",
+        ros=fill(rule.ros),
+        ros_type=rule.ros_type,
+        frame_id=fill(rule.frame_id),
+        tf=TfSpec(fill(rule.tf.parent), fill(rule.tf.child)) if rule.tf else None,
+        convention=rule.convention,
+        options=rule.options,
+        params=rule.params,
+        variables=MappingProxyType(dict(variables)),
+        source=MappingProxyType(source),
+        ros_kind=rule.ros_kind,
+    )
+
+
+def expand(mapping: MappingDoc, scene: Scene, node_name: str, namespace: str = "") -> tuple[BridgeSpec, ...]:
+    """All concrete bridges of `mapping` over `scene`; MappingError when names are illegal or collide."""
+    bridges: list[BridgeSpec] = []
+    problems: list[Problem] = []
+    owners: dict[str, BridgeSpec] = {}
+    lines = {rule.name: rule.line for rule in mapping.rules}
+    for rule in mapping.rules:
+        if not rule.options.enabled:
+            continue
+        for key, variables, source in elements(rule, mapping, scene, node_name, namespace):
+            bridge = _bridge(rule, key, variables, source)
+            if bridge.ros is not None:
+                why = ros_name_problem(bridge.ros)
+                if why:
+                    message = f"bridge {bridge.name}: ROS name '{bridge.ros}' is not valid: {why}"
+                    problems.append(Problem(mapping.source, rule.line, 1, message))
+                elif bridge.ros in owners:
+                    other = owners[bridge.ros]
+                    message = (
+                        f"bridge {bridge.name}: ROS name '{bridge.ros}' is also produced by "
+                        f"{other.name} (rule at line {lines[other.rule]})"
+                    )
+                    problems.append(Problem(mapping.source, rule.line, 1, message))
+                else:
+                    owners[bridge.ros] = bridge
+            bridges.append(bridge)
+    if problems:
+        raise MappingError(problems)
+    return tuple(bridges)

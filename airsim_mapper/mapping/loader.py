@@ -1,0 +1,102 @@
+"""Load a mapping YAML file: parse safely with line marks, validate against the schema, build the rules,
+then check their meaning (converters, ROS types, template variables, ROS names, duplicates).
+
+Every problem is collected and reported at once in one MappingError, each as `FILE:LINE:COL: message`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from airsim_mapper.mapping.checks import check_rules
+from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.model import Limits, Mapping, Options, Rule, TfSpec
+from airsim_mapper.mapping.schema import schema_problems
+from airsim_mapper.mapping.yamlmarks import load_marked
+
+DEFAULT_IMAGE_TYPES: dict[int, str] = {
+    0: "scene_camera",
+    1: "depth_planar_camera",
+    2: "depth_camera",
+    3: "segmentation_camera",
+    4: "depth_vis_camera",
+    5: "disparity_normalized_camera",
+    6: "surface_normals",
+}
+OPTION_KEYS = ("queue_size", "latch", "lazy", "rate_limit_hz", "stamp", "enabled", "watchdog_s")
+LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "on_violation")
+
+
+def load_mapping(path: str | Path) -> Mapping:
+    """Read, validate and build the mapping in `path`; raise MappingError with every problem found."""
+    file = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+        raise MappingError.single(file, f"cannot read the mapping file: {reason}", unreadable=True) from None
+    return load_mapping_text(text, file)
+
+
+def load_mapping_text(text: str, file: str = "<string>") -> Mapping:
+    """Validate and build a mapping from YAML text; `file` names it in messages."""
+    data, marks = load_marked(text, file)
+    if not isinstance(data, dict):
+        kind = "a list" if isinstance(data, list) else f"the scalar {data!r}"
+        raise MappingError.single(file, f"the top level must be a mapping of keys (found {kind})", 1, 1)
+    located = schema_problems(data, marks, file)
+    problems = [problem for _, problem in located]
+    bad_rules = {path[1] for path, _ in located if len(path) > 1 and path[0] == "rules"}
+    if any(len(path) < 2 or path[0] != "rules" for path, _ in located):
+        raise MappingError(sorted(problems))  # the document's frame is broken: rules cannot be built
+    defaults_raw = data.get("defaults", {})
+    defaults = _options(defaults_raw, Options())
+    convention = defaults_raw.get("convention", "ned")
+    rules = [
+        _rule(raw, defaults, convention, marks.value(("rules", index))[0])
+        for index, raw in enumerate(data["rules"])
+        if index not in bad_rules
+    ]
+    indexes = [index for index in range(len(data["rules"])) if index not in bad_rules]
+    semantic, rules = check_rules(rules, indexes, data, marks, file)
+    problems += semantic
+    if problems:
+        raise MappingError(sorted(set(problems)))
+    image_types = data.get("image_types")
+    table = {int(k): v for k, v in image_types.items()} if image_types else dict(DEFAULT_IMAGE_TYPES)
+    return Mapping(
+        version=data["version"],
+        image_types=MappingProxyType(dict(sorted(table.items()))),
+        defaults=defaults,
+        rules=tuple(rules),
+        source=file,
+    )
+
+
+def _options(raw: dict[str, Any], base: Options) -> Options:
+    values = {key: raw.get(key, getattr(base, key)) for key in OPTION_KEYS}
+    limits_raw = raw.get("limits") or {}
+    limits = Limits(**{key: limits_raw.get(key, getattr(base.limits, key)) for key in LIMIT_KEYS})
+    values["queue_size"] = int(values["queue_size"])
+    return Options(**values, limits=limits)
+
+
+def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int) -> Rule:
+    tf = raw.get("tf")
+    return Rule(
+        name=raw["name"],
+        domain=raw["for_each"],
+        direction=raw["direction"],
+        sim=raw.get("sim"),
+        ros=raw.get("ros"),
+        ros_type=raw.get("type"),
+        converter=raw["converter"],
+        frame_id=raw.get("frame_id"),
+        tf=TfSpec(tf["parent"], tf["child"]) if tf else None,
+        convention=raw.get("convention", convention),
+        options=_options(raw, defaults),
+        params=MappingProxyType(dict(raw.get("params") or {})),
+        line=line,
+    )

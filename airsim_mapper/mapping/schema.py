@@ -1,0 +1,88 @@
+"""The mapping JSON Schema (schemas/mapping.schema.json) and readable, located messages for its errors."""
+
+from __future__ import annotations
+
+import difflib
+import json
+from collections.abc import Iterator
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+
+from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.yamlmarks import Marks
+
+SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "mapping.schema.json"
+
+
+@cache
+def schema() -> dict[str, Any]:
+    """The mapping schema, read once."""
+    return json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
+
+
+def did_you_mean(word: str, choices: Any) -> str:
+    """` (did you mean 'x'?)` for the closest choice, or '' when none is close."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.8)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def where(path: tuple[Any, ...], data: Any) -> str:
+    """A readable location: `rules[2] 'camera_image'.queue_size`."""
+    text = ""
+    node = data
+    for part in path:
+        if isinstance(part, int):
+            text += f"[{part}]"
+            node = node[part] if isinstance(node, list) and part < len(node) else None
+            if len(text) and isinstance(node, dict) and isinstance(node.get("name"), str):
+                text += f" '{node['name']}'"
+        else:
+            text += f".{part}" if text else str(part)
+            node = node.get(part) if isinstance(node, dict) else None
+    return text or "top level"
+
+
+def _brief(value: Any) -> str:
+    text = json.dumps(value, default=str)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Iterator[tuple[tuple, str]]:
+    path = tuple(err.absolute_path)
+    loc = where(path, data)
+    if err.validator == "additionalProperties" and isinstance(err.instance, dict):
+        known = err.schema.get("properties", {})
+        for key in err.instance:
+            if key not in known:
+                yield (*path, key), f"unknown key '{key}' in {loc}{did_you_mean(key, known)}"
+    elif err.validator == "required":
+        yield path, f"{loc}: {err.message.replace('is a required property', 'is required')}"
+    elif err.validator == "enum":
+        choices = err.validator_value
+        hint = did_you_mean(err.instance, choices) or f" (one of: {', '.join(map(str, choices))})"
+        yield path, f"{loc}: {_brief(err.instance)} is not allowed{hint}"
+    elif err.validator == "type":
+        expected = (
+            err.validator_value if isinstance(err.validator_value, str) else " or ".join(err.validator_value)
+        )
+        yield path, f"{loc}: expected {expected}, got {_brief(err.instance)}"
+    elif err.validator == "const":
+        yield path, f"{loc}: must be {_brief(err.validator_value)}, got {_brief(err.instance)}"
+    elif err.validator == "pattern":
+        yield path, f"{loc}: {_brief(err.instance)} does not match {err.validator_value}"
+    else:
+        yield path, f"{loc}: {err.message}"
+
+
+def schema_problems(data: Any, marks: Marks, file: str) -> list[tuple[tuple[Any, ...], Problem]]:
+    """Every schema violation of `data` with its path, located at its key or value in the file."""
+    validator = jsonschema.Draft202012Validator(schema())
+    problems = []
+    for err in validator.iter_errors(data):
+        for path, message in _messages(err, data, marks):
+            line, col = marks.key(path) if err.validator == "additionalProperties" else marks.value(path)
+            problems.append((path, Problem(file, line, col, message)))
+    return problems

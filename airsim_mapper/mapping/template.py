@@ -1,0 +1,41 @@
+"""Name templates: `<variable>` placeholders, e.g. `/airsim_node/<robot_name>/actual_pose`.
+
+A placeholder is `<` + a lower-case identifier + `>`. Any other `<` or `>` is malformed.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+
+PLACEHOLDER = re.compile(r"<([a-z][a-z0-9_]*)>")
+
+
+class TemplateError(ValueError):
+    """A template is malformed or names a variable that has no value."""
+
+
+def variables(template: str) -> tuple[str, ...]:
+    """The placeholder names of `template`, in order of first appearance."""
+    return tuple(dict.fromkeys(PLACEHOLDER.findall(template)))
+
+
+def malformed(template: str) -> str | None:
+    """A description of the first stray `<` or `>`, or None when the template is well formed."""
+    rest = PLACEHOLDER.sub("", template)
+    for char in "<>":
+        if char in rest:
+            return f"stray '{char}' (placeholders are written <name>, lower case)"
+    return None
+
+
+def render(template: str, values: Mapping[str, str]) -> str:
+    """Substitute every placeholder; raise TemplateError for a variable without a value."""
+
+    def one(match: re.Match[str]) -> str:
+        name = match.group(1)
+        if name not in values:
+            raise TemplateError(f"template variable <{name}> has no value")
+        return values[name]
+
+    return PLACEHOLDER.sub(one, template)

@@ -1,0 +1,146 @@
+"""Safe YAML loading that remembers where every value came from.
+
+`load_marked(text, file)` returns plain Python data (dicts with str keys, lists, scalars) and a table from
+each value's path (a tuple of keys and indexes) to its (line, column), 1-based. Only the safe YAML tags are
+constructed; `!!python/...` tags and other unknown tags are errors. Duplicate keys and recursive aliases are
+errors too, never silently accepted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import yaml
+
+from airsim_mapper.mapping.errors import MappingError, Problem
+
+Path = tuple[Any, ...]
+MAX_DEPTH = 64
+PLAIN_COLLECTION_TAGS = ("tag:yaml.org,2002:map", "tag:yaml.org,2002:seq")
+
+
+@dataclass(frozen=True)
+class Marks:
+    """Where each path's value (and, for mapping entries, its key) starts in the file."""
+
+    values: dict[Path, tuple[int, int]]
+    keys: dict[Path, tuple[int, int]]
+
+    def value(self, path: Path) -> tuple[int, int]:
+        """The nearest known mark for `path`, walking up to its parents."""
+        for cut in range(len(path), -1, -1):
+            if path[:cut] in self.values:
+                return self.values[path[:cut]]
+        return (1, 1)
+
+    def key(self, path: Path) -> tuple[int, int]:
+        """The mark of the key that names `path` (or of its value when it has no key)."""
+        return self.keys.get(path) or self.value(path)
+
+
+def _mark(node: yaml.Node) -> tuple[int, int]:
+    return (node.start_mark.line + 1, node.start_mark.column + 1)
+
+
+def _yaml_problem(file: str, err: yaml.YAMLError) -> Problem:
+    mark = getattr(err, "problem_mark", None) or getattr(err, "context_mark", None)
+    problem = getattr(err, "problem", None) or str(err)
+    context = getattr(err, "context", None)
+    if "'\\t'" in problem:
+        problem = "a tab character; YAML allows only spaces for indentation"
+    text = f"invalid YAML: {problem}" + (f" ({context})" if context else "")
+    if mark is None:
+        return Problem(file, 1, 1, text)
+    return Problem(file, mark.line + 1, mark.column + 1, text)
+
+
+class _Builder:
+    """Turns a composed YAML node tree into plain data, recording marks and collecting problems."""
+
+    def __init__(self, loader: yaml.SafeLoader, file: str) -> None:
+        self.loader = loader
+        self.file = file
+        self.values: dict[Path, tuple[int, int]] = {}
+        self.keys: dict[Path, tuple[int, int]] = {}
+        self.problems: list[Problem] = []
+
+    def problem(self, node: yaml.Node, message: str) -> None:
+        line, col = _mark(node)
+        self.problems.append(Problem(self.file, line, col, message))
+
+    def build(self, node: yaml.Node, path: Path, stack: tuple[int, ...]) -> Any:
+        self.values.setdefault(path, _mark(node))
+        if id(node) in stack or len(stack) > MAX_DEPTH:
+            self.problem(node, "recursive or too deeply nested YAML (aliases that contain themselves?)")
+            return None
+        stack = (*stack, id(node))
+        if node.tag not in PLAIN_COLLECTION_TAGS and not isinstance(node, yaml.ScalarNode):
+            self.problem(node, f"invalid YAML value: the tag '{node.tag}' is not allowed (only plain data)")
+            return None
+        if isinstance(node, yaml.MappingNode):
+            return self._mapping(node, path, stack)
+        if isinstance(node, yaml.SequenceNode):
+            return [self.build(item, (*path, i), stack) for i, item in enumerate(node.value)]
+        return self._scalar(node)
+
+    def _scalar(self, node: yaml.Node) -> Any:
+        try:
+            return self.loader.construct_object(node, deep=True)
+        except yaml.YAMLError as err:
+            problem = getattr(err, "problem", None) or str(err)
+            self.problem(node, f"invalid YAML value: {problem}")
+            return None
+
+    def _mapping(self, node: yaml.MappingNode, path: Path, stack: tuple[int, ...]) -> dict[str, Any]:
+        try:
+            self.loader.flatten_mapping(node)
+        except yaml.YAMLError as err:
+            self.problem(node, f"invalid YAML merge: {getattr(err, 'problem', err)}")
+            return {}
+        result: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            if not isinstance(key_node, yaml.ScalarNode):
+                self.problem(key_node, "mapping keys must be plain scalars")
+                continue
+            raw_key = self._scalar(key_node)
+            key = "null" if raw_key is None else str(raw_key)
+            if key in result:
+                self.problem(key_node, f"duplicate key '{key}'")
+                continue
+            self.keys[(*path, key)] = _mark(key_node)
+            result[key] = self.build(value_node, (*path, key), stack)
+        return result
+
+
+def _reader_problem(file: str, text: str, err: yaml.reader.ReaderError) -> Problem:
+    position = max(0, min(err.position, len(text)))
+    line = text.count("\n", 0, position) + 1
+    column = position - (text.rfind("\n", 0, position) + 1) + 1
+    return Problem(file, line, column, f"invalid YAML: character #x{err.character:04x} is not allowed")
+
+
+def load_marked(text: str, file: str) -> tuple[Any, Marks]:
+    """Parse one YAML document safely; raise MappingError listing every problem found."""
+    try:
+        loader = yaml.SafeLoader(text)
+    except yaml.reader.ReaderError as err:
+        raise MappingError([_reader_problem(file, text, err)]) from None
+    try:
+        try:
+            node = loader.get_single_node()
+        except yaml.reader.ReaderError as err:
+            raise MappingError([_reader_problem(file, text, err)]) from None
+        except yaml.YAMLError as err:
+            raise MappingError([_yaml_problem(file, err)]) from None
+        except (ValueError, RecursionError) as err:  # e.g. too deep nesting for the composer
+            raise MappingError.single(file, f"invalid YAML: {type(err).__name__}", 1, 1) from None
+        if node is None:
+            raise MappingError.single(file, "the file is empty (expected a mapping document)", 1, 1)
+        builder = _Builder(loader, file)
+        data = builder.build(node, (), ())
+        if builder.problems:
+            raise MappingError(sorted(builder.problems))
+        return data, Marks(builder.values, builder.keys)
+    finally:
+        loader.dispose()

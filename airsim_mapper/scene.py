@@ -1,0 +1,276 @@
+"""Read a scene and its robot configs exactly as the simulator will receive them.
+
+The merging and the JSON-schema validation are the client's own (`projectairsim.utils.
+load_scene_config_as_dict`, protocol.md 6.1); this module wraps it so that files outside the config directory
+are refused and every failure is a SceneError naming the file, and it lists the scene's robots, sensors and
+capture settings as plain frozen values. `Scene.config` is the merged dict the engine sends to the simulator.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path, PurePath
+from typing import Any
+
+from airsim_mapper.mapping.errors import ConfigError
+
+# image-type id -> the simulator's topic leaf for it (protocol.md section 4)
+SIM_IMAGE_LEAVES: dict[int, str] = {
+    0: "scene_camera",
+    1: "depth_planar_camera",
+    2: "depth_camera",
+    3: "segmentation_camera",
+    4: "depth_vis_camera",
+    5: "disparity_normalized_camera",
+    6: "surface_normals_camera",
+}
+
+
+SCENE_SCHEMA = "schema/scene_config_schema.jsonc"
+ROBOT_SCHEMA = "schema/robot_config_schema.jsonc"
+
+
+class SceneError(ConfigError):
+    """The scene or a robot config cannot be read, lies outside the config directory, or is invalid."""
+
+
+@dataclass(frozen=True)
+class CaptureSetting:
+    image_type: int
+    capture_enabled: bool
+    streaming_enabled: bool
+    settings: Mapping[str, Any]  # the capture-settings entry as written (width, height, fov-degrees, ...)
+
+
+@dataclass(frozen=True)
+class Sensor:
+    id: str
+    kind: str  # the config's "type" with '-' as '_' (camera, lidar, radar, imu, distance_sensor, ...)
+    enabled: bool
+    config: Mapping[str, Any]  # the sensor entry of the merged robot config
+
+    @property
+    def captures(self) -> tuple[CaptureSetting, ...]:
+        """A camera's capture settings (empty for other sensors)."""
+        entries = self.config.get("capture-settings") or []
+        return tuple(
+            CaptureSetting(
+                image_type=int(entry.get("image-type", 0)),
+                capture_enabled=bool(entry.get("capture-enabled", False)),
+                streaming_enabled=bool(entry.get("streaming-enabled", False)),
+                settings=entry,
+            )
+            for entry in entries
+            if isinstance(entry, Mapping)
+        )
+
+
+@dataclass(frozen=True)
+class Robot:
+    name: str
+    actor: Mapping[str, Any]  # the scene's actor entry without its (large) robot-config
+    sensors: tuple[Sensor, ...]
+
+    def enabled_sensors(self, kind: str) -> tuple[Sensor, ...]:
+        return tuple(sensor for sensor in self.sensors if sensor.kind == kind and sensor.enabled)
+
+
+@dataclass(frozen=True)
+class StreamingCamera:
+    robot_name: str
+    camera_name: str
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str  # the scene's "id": <scene_name>
+    file: str  # the scene file name, as given
+    config_dir: str  # the --simconfigpath directory, resolved
+    robots: tuple[Robot, ...]
+    config: Mapping[str, Any]  # the merged scene dict, robot configs inlined: what the simulator receives
+
+    @property
+    def streaming_cameras(self) -> tuple[StreamingCamera, ...]:
+        """Enabled cameras with a capture- and streaming-enabled scene (type 0) setting, in scene order."""
+        return tuple(
+            StreamingCamera(robot.name, camera.id)
+            for robot in self.robots
+            for camera in robot.enabled_sensors("camera")
+            if any(c.image_type == 0 and c.capture_enabled and c.streaming_enabled for c in camera.captures)
+        )
+
+
+def contained(root: Path, name: str, what: str) -> Path:
+    """`root / name` if it stays inside `root` (no absolute path, no '..', no symlink escaping it)."""
+    if not isinstance(name, str) or not name:
+        raise SceneError.single(str(root), f"{what} must be a non-empty file name, got {name!r}")
+    pure = PurePath(name)
+    if pure.is_absolute():
+        raise SceneError.single(name, f"{what} must be relative to the config directory {root}")
+    if ".." in pure.parts:
+        raise SceneError.single(name, f"{what} may not leave the config directory {root} ('..')")
+    path = root / pure
+    resolved = path.resolve()
+    if not resolved.is_relative_to(root):
+        raise SceneError.single(str(path), f"{what} resolves outside the config directory {root} (symlink)")
+    return path
+
+
+def _parse(path: Path, what: str, unreadable: bool) -> Any:
+    import commentjson
+
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+        raise SceneError.single(
+            str(path), f"cannot read the {what}: {reason}", unreadable=unreadable
+        ) from None
+    try:
+        return commentjson.loads(text)
+    except Exception as err:  # commentjson raises lark errors, ValueError, RecursionError...
+        first = str(err).splitlines()[0] if str(err) else type(err).__name__
+        raise SceneError.single(str(path), f"invalid JSON in the {what}: {first}") from None
+
+
+def _schema_message(err: Any) -> str:
+    where = "/".join(str(p) for p in err.absolute_path) or "top level"
+    return f"{where}: {err.message}"
+
+
+def _robot_config_names(actor: Mapping[str, Any]) -> list[str]:
+    names = actor.get("robot-config")
+    return list(names) if isinstance(names, list) else [names]
+
+
+@contextlib.contextmanager
+def _quiet_client_log() -> Iterator[None]:
+    """Keep the client's logger from creating its console handler and projectairsim_client.log file."""
+    logger = logging.getLogger("projectairsim")
+    handler = None if logger.hasHandlers() else logging.NullHandler()
+    if handler:
+        logger.addHandler(handler)
+    try:
+        yield
+    finally:
+        if handler:
+            logger.removeHandler(handler)
+
+
+@cache
+def _schema_json(get_schema: Callable[[str], Any], text: str) -> str:
+    """A schema text parsed once by the client's own `get_schema` (it re-parses ~100 kB of jsonc per call)."""
+    return json.dumps(get_schema(text))
+
+
+def _schema(resource: str) -> dict[str, Any]:
+    """The client's packaged schema `resource`, as a fresh dict."""
+    from projectairsim.utils import get_schema, load_text_resource
+
+    return json.loads(_schema_json(get_schema, load_text_resource(resource)))
+
+
+@contextlib.contextmanager
+def _fast_client_schemas() -> Iterator[None]:
+    """Let the client's loader reuse the schemas it already parsed (same results, ~1 s faster a call)."""
+    import projectairsim.utils as client_utils
+
+    original = client_utils.get_schema
+    client_utils.get_schema = lambda text: json.loads(_schema_json(original, text))
+    try:
+        yield
+    finally:
+        client_utils.get_schema = original
+
+
+def _precheck(root: Path, path: Path) -> dict[str, Any]:
+    """Parse and schema-check the scene and locate its robot configs: errors name the file at fault."""
+    import jsonschema
+
+    data = _parse(path, "scene file", unreadable=True)
+    validator = jsonschema.Draft4Validator(_schema(SCENE_SCHEMA))
+    errors = sorted(validator.iter_errors(data), key=lambda e: [str(p) for p in e.path])
+    if errors:
+        raise SceneError.single(str(path), "does not match the scene schema: " + _schema_message(errors[0]))
+    for actor in data.get("actors", []):
+        if actor.get("type") == "robot":
+            for name in _robot_config_names(actor):
+                config = contained(root, name, f"robot-config of actor '{actor['name']}'")
+                if not config.is_file():
+                    raise SceneError.single(str(config), f"robot config of actor '{actor['name']}' not found")
+    return data
+
+
+def _diagnose_robot(root: Path, data: Mapping[str, Any], err: Exception) -> SceneError:
+    """Name the robot config file (or actor) at fault after the client's loader failed."""
+    import jsonschema
+    from projectairsim.utils import merge_dicts
+
+    validator = jsonschema.Draft4Validator(_schema(ROBOT_SCHEMA))
+    for actor in data.get("actors", []):
+        if actor.get("type") != "robot":
+            continue
+        names = _robot_config_names(actor)
+        merged: dict[str, Any] = {}
+        for name in names:
+            merged = merge_dicts(
+                merged, _parse(root / name, f"robot config of actor '{actor['name']}'", False)
+            )
+        errors = sorted(validator.iter_errors(merged), key=lambda e: [str(p) for p in e.path])
+        if errors:
+            files = ", ".join(str(root / name) for name in names)
+            return SceneError.single(files, "does not match the robot schema: " + _schema_message(errors[0]))
+    return SceneError.single(str(root), f"the client's loader failed: {type(err).__name__}: {err}")
+
+
+def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
+    """Read `scene_file` from the `simconfigpath` directory with the client's loader; raise SceneError."""
+    root = Path(simconfigpath).resolve()
+    if not root.is_dir():
+        raise SceneError.single(str(simconfigpath), "the config directory does not exist", unreadable=True)
+    path = contained(root, scene_file, "the scene file")
+    raw = _precheck(root, path)
+    from projectairsim.utils import load_scene_config_as_dict
+
+    try:
+        with _quiet_client_log(), _fast_client_schemas():
+            data, _ = load_scene_config_as_dict(str(PurePath(scene_file)), str(root) + "/")
+    except SceneError:
+        raise
+    except Exception as err:  # the client raises jsonschema, lark, OS and type errors
+        raise _diagnose_robot(root, raw, err) from None
+    return _scene(data, scene_file, path)
+
+
+def scene_from_config(config: Mapping[str, Any], scene_file: str, simconfigpath: str | Path) -> Scene:
+    """A Scene from an already merged scene dict (e.g. `World.get_configuration()` of a mission script)."""
+    root = Path(simconfigpath).resolve()
+    if not isinstance(config, Mapping) or not isinstance(config.get("id"), str):
+        raise SceneError.single(scene_file or str(root), "the scene configuration has no string 'id'")
+    if not isinstance(config.get("actors", []), list):
+        raise SceneError.single(scene_file or str(root), "the scene configuration's 'actors' is not a list")
+    return _scene(dict(config), scene_file, root / (scene_file or "scene.jsonc"))
+
+
+def _scene(data: dict[str, Any], scene_file: str, path: Path) -> Scene:
+    robots = []
+    for actor in data.get("actors", []):
+        if not isinstance(actor, Mapping) or actor.get("type") != "robot":
+            continue
+        config = actor.get("robot-config") or {}
+        if not isinstance(config, Mapping):
+            raise SceneError.single(str(path), f"actor '{actor.get('name')}': robot-config is not inlined")
+        sensors = []
+        for entry in config.get("sensors", []) or []:
+            if not isinstance(entry, Mapping) or not isinstance(entry.get("id"), str):
+                raise SceneError.single(str(path), f"actor '{actor['name']}': a sensor has no string 'id'")
+            kind = str(entry.get("type", "")).replace("-", "_")
+            sensors.append(Sensor(entry["id"], kind, entry.get("enabled", True) is not False, entry))
+        header = {key: value for key, value in actor.items() if key != "robot-config"}
+        robots.append(Robot(actor["name"], header, tuple(sensors)))
+    return Scene(str(data["id"]), scene_file, str(path.parent), tuple(robots), data)

@@ -1,0 +1,1 @@
+"""Headless Project AirSim-compatible simulator server."""

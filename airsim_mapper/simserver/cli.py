@@ -1,0 +1,67 @@
+"""`airsim-mapper-sim`: run the headless Project AirSim-compatible server until SIGINT/SIGTERM."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+import threading
+from collections.abc import Sequence
+
+from airsim_mapper.simserver.server import ServerOptions, SimServer
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="airsim-mapper-sim",
+        description="Headless simulator server speaking the protocol of the projectairsim 1.1.0 client.",
+    )
+    parser.add_argument("--address", default="0.0.0.0", help="bind address (default 0.0.0.0)")
+    parser.add_argument("--topicsport", type=int, default=8989, help="topics (Pair0) port, default 8989")
+    parser.add_argument("--servicesport", type=int, default=8990, help="services (Rep0) port, default 8990")
+    parser.add_argument(
+        "--world", default=None, help="world file (JSON or YAML); default: the built-in world"
+    )
+    parser.add_argument("--pose-rate", type=float, default=100.0, help="actual_pose publish rate in Hz")
+    parser.add_argument(
+        "--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"], help="logging level"
+    )
+    return parser.parse_args(argv)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parse_args(argv)
+    logging.basicConfig(level=args.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    log = logging.getLogger("airsim_mapper.simserver")
+    if args.pose_rate <= 0:
+        log.error("--pose-rate must be positive, got %s", args.pose_rate)
+        return 2
+    options = ServerOptions(
+        address=args.address,
+        topics_port=args.topicsport,
+        services_port=args.servicesport,
+        world_path=args.world,
+        pose_rate_hz=args.pose_rate,
+        tick_rate_hz=max(200.0, args.pose_rate),
+    )
+    try:
+        server = SimServer(options)
+    except Exception as exc:  # a bad world file or a busy port: say so and exit non-zero
+        log.error("cannot start: %s", exc)
+        return 1
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    server.start()
+    print(f"airsim-mapper-sim ready: topics {args.topicsport}, services {args.servicesport}", flush=True)
+    while not stop.wait(0.5):
+        pass
+    log.info("stopping")
+    server.stop()
+    log.info("stopped")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

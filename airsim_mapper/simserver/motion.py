@@ -1,0 +1,327 @@
+"""Kinematic multirotor motion: commands turn into a velocity and a yaw rate each tick (no aerodynamics).
+
+A `Body` holds one robot's state and its active command. A new command pre-empts the running one, which
+then completes with `False`; a command completes with `True` when it reaches its goal or duration. Time is
+sim time (seconds): while the clock is paused nothing moves and nothing completes.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from airsim_mapper.geometry import quat_from_rpy, quat_multiply, quat_normalize, rotate, yaw_of
+
+TAKEOFF_HEIGHT_M = 3.0
+TAKEOFF_SPEED = 3.0
+LAND_SPEED = 2.5
+VERTICAL_GAIN = 2.0
+MAX_VERTICAL_SPEED = 5.0
+MAX_YAW_RATE = math.pi
+ARRIVAL_M = 0.02
+LANDED_HEIGHT_M = 0.15
+FORWARD_ONLY = 1
+
+GroundFn = Callable[[np.ndarray], float]
+
+
+def wrap_angle(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+@dataclass
+class Kinematic:
+    """World NED state of a body: position (m), orientation (w,x,y,z), rates and accelerations."""
+
+    position: np.ndarray
+    orientation: np.ndarray
+    linear_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    angular_velocity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    linear_acceleration: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    angular_acceleration: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def copy(self) -> Kinematic:
+        return Kinematic(*(np.array(v, dtype=float) for v in vars(self).values()))
+
+
+@dataclass
+class Motion:
+    """What a command wants for one tick: world velocity (m/s) and yaw rate (rad/s)."""
+
+    velocity: np.ndarray
+    yaw_rate: float = 0.0
+
+
+@dataclass
+class YawMode:
+    """Yaw control: a rate (rad/s) or an absolute yaw (rad); ForwardOnly faces the direction of travel."""
+
+    is_rate: bool = True
+    value: float = 0.0
+    drivetrain: int = 0
+
+    def rate(self, current_yaw: float, velocity: np.ndarray, dt: float) -> float:
+        if self.is_rate:
+            target = None if self.drivetrain != FORWARD_ONLY else self._forward(velocity, 0.0)
+            if target is None:
+                return self.value
+        else:
+            target = self._forward(velocity, self.value) if self.drivetrain == FORWARD_ONLY else self.value
+            if target is None:
+                target = self.value
+        return turn_rate(current_yaw, target, MAX_YAW_RATE, dt)
+
+    @staticmethod
+    def _forward(velocity: np.ndarray, offset: float) -> float | None:
+        if math.hypot(velocity[0], velocity[1]) < 0.1:
+            return None
+        return math.atan2(velocity[1], velocity[0]) + offset
+
+
+def turn_rate(current: float, target: float, max_rate: float, dt: float) -> float:
+    """Yaw rate that reaches `target` without overshoot within one tick, capped at `max_rate`."""
+    error = wrap_angle(target - current)
+    if dt <= 0:
+        return 0.0
+    return float(np.clip(error / dt, -max_rate, max_rate))
+
+
+class Command:
+    """A motion command; subclasses implement `motion`. `wait` blocks the service worker until it ends."""
+
+    name = "Command"
+
+    def __init__(self, timeout_s: float = math.inf) -> None:
+        self.elapsed = 0.0
+        self.timeout_s = timeout_s
+        self.result: bool | None = None
+        self._done = threading.Event()
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        """The motion for this tick, or None when the goal is reached (the command succeeds)."""
+        raise NotImplementedError
+
+    def finish(self, result: bool) -> None:
+        if self.result is None:
+            self.result = result
+            self._done.set()
+
+    def wait(self, timeout_s: float | None = None) -> bool:
+        self._done.wait(timeout_s)
+        return bool(self.result)
+
+    @property
+    def done(self) -> bool:
+        return self._done.is_set()
+
+
+class Hold(Command):
+    """Hover in place (velocity zero); completes at once."""
+
+    name = "Hover"
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        return None
+
+
+class Velocity(Command):
+    """Constant world velocity for `duration` s; `z` (if set) replaces vz by an altitude hold."""
+
+    name = "MoveByVelocity"
+
+    def __init__(
+        self, velocity: Sequence[float], duration: float, yaw: YawMode, z: float | None = None
+    ) -> None:
+        super().__init__()
+        self.velocity = np.asarray(velocity, dtype=float)
+        self.duration = max(0.0, float(duration))
+        self.yaw = yaw
+        self.z = z
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        if self.elapsed >= self.duration:
+            return None
+        velocity = self.velocity.copy()
+        if self.z is not None:
+            velocity[2] = np.clip(
+                VERTICAL_GAIN * (self.z - state.position[2]), -MAX_VERTICAL_SPEED, MAX_VERTICAL_SPEED
+            )
+        return Motion(velocity, self.yaw.rate(yaw_of(state.orientation), velocity, dt))
+
+
+class Path(Command):
+    """Fly straight through each waypoint in turn at `speed`."""
+
+    name = "MoveOnPath"
+
+    def __init__(
+        self, waypoints: Sequence[Sequence[float]], speed: float, yaw: YawMode, timeout_s: float
+    ) -> None:
+        super().__init__(timeout_s)
+        self.waypoints = [np.asarray(p, dtype=float) for p in waypoints]
+        self.speed = max(1e-3, abs(float(speed)))
+        self.yaw = yaw
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        while self.waypoints and np.linalg.norm(self.waypoints[0] - state.position) < ARRIVAL_M:
+            self.waypoints.pop(0)
+        if not self.waypoints:
+            return None
+        offset = self.waypoints[0] - state.position
+        distance = float(np.linalg.norm(offset))
+        speed = min(self.speed, distance / dt) if dt > 0 else self.speed
+        velocity = offset / distance * speed
+        return Motion(velocity, self.yaw.rate(yaw_of(state.orientation), velocity, dt))
+
+
+class Land(Command):
+    """Descend at LAND_SPEED until the ground; completes on touchdown."""
+
+    name = "Land"
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        height = ground_z - state.position[2]
+        if height <= 1e-3:
+            return None
+        speed = min(LAND_SPEED, height / dt) if dt > 0 else LAND_SPEED
+        return Motion(np.array([0.0, 0.0, speed]))
+
+
+class Rotate(Command):
+    """Turn to an absolute yaw (within `margin`) or at a rate for a duration."""
+
+    name = "Rotate"
+
+    def __init__(
+        self,
+        target: float | None,
+        rate: float,
+        duration: float = math.inf,
+        margin: float = 0.01,
+        timeout_s: float = math.inf,
+    ) -> None:
+        super().__init__(timeout_s)
+        self.target = target
+        self.rate = rate
+        self.duration = duration
+        self.margin = max(margin, 1e-4)
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        yaw = yaw_of(state.orientation)
+        if self.target is None:
+            return None if self.elapsed >= self.duration else Motion(np.zeros(3), self.rate)
+        if abs(wrap_angle(self.target - yaw)) <= self.margin:
+            return None
+        max_rate = abs(self.rate) if self.rate > 0 else MAX_YAW_RATE
+        return Motion(np.zeros(3), turn_rate(yaw, self.target, max_rate, dt))
+
+
+class Body:
+    """One robot's kinematic state, its active command and its API flags (all thread-safe)."""
+
+    def __init__(self, position: np.ndarray, orientation: np.ndarray, ground: GroundFn) -> None:
+        self.lock = threading.RLock()
+        self.state = Kinematic(np.array(position, dtype=float), quat_normalize(orientation))
+        self.home = np.array(position, dtype=float)
+        self.ground = ground
+        self.api_control = False
+        self.armed = False
+        self.active: Command | None = None
+        self.updated_ns = 0
+
+    # -- commands
+
+    def run(self, command: Command) -> Command:
+        """Make `command` the active one; the previous one (if running) completes with False."""
+        with self.lock:
+            previous, self.active = self.active, command
+        if previous is not None:
+            previous.finish(False)
+        return command
+
+    def cancel(self) -> bool:
+        with self.lock:
+            previous, self.active = self.active, None
+        if previous is not None:
+            previous.finish(False)
+            return True
+        return False
+
+    def snapshot(self) -> Kinematic:
+        with self.lock:
+            return self.state.copy()
+
+    def teleport(self, position: np.ndarray, orientation: np.ndarray, reset_kinematics: bool) -> None:
+        """SetPose / desired_pose: jump there; the running command is cancelled (it replies False)."""
+        self.cancel()
+        with self.lock:
+            self.state.position = np.array(position, dtype=float)
+            self.state.orientation = quat_normalize(orientation)
+            if reset_kinematics:
+                for name in (
+                    "linear_velocity",
+                    "angular_velocity",
+                    "linear_acceleration",
+                    "angular_acceleration",
+                ):
+                    setattr(self.state, name, np.zeros(3))
+
+    def height_above_ground(self) -> float:
+        with self.lock:
+            position = self.state.position.copy()
+        return self.ground(position) - position[2]
+
+    def landed(self) -> bool:
+        with self.lock:
+            moving = self.active is not None and not isinstance(self.active, Hold)
+            speed = float(np.linalg.norm(self.state.linear_velocity))
+        return not moving and speed < 0.1 and self.height_above_ground() < LANDED_HEIGHT_M
+
+    # -- integration
+
+    def tick(self, dt: float, blocked: Callable[[np.ndarray, np.ndarray], bool] | None = None) -> None:
+        """Advance by `dt` sim seconds; `blocked(old, new)` may veto a move into an obstacle."""
+        if dt <= 0:
+            return
+        with self.lock:
+            state = self.state
+            command = self.active
+            ground_z = self.ground(state.position)
+            motion = None
+            if command is not None:
+                if command.elapsed >= command.timeout_s:
+                    self.active = None
+                    command.finish(False)
+                    command = None
+                else:
+                    motion = command.motion(state, dt, ground_z)
+                    command.elapsed += dt
+                    if motion is None:
+                        self.active = None
+                        command.finish(True)
+            velocity = motion.velocity if motion is not None else np.zeros(3)
+            yaw_rate = motion.yaw_rate if motion is not None else 0.0
+            new_position = state.position + velocity * dt
+            new_position[2] = min(new_position[2], self.ground(new_position))
+            if blocked is not None and blocked(state.position, new_position):
+                new_position = state.position.copy()
+            actual_velocity = (new_position - state.position) / dt
+            angular = np.array([0.0, 0.0, yaw_rate])
+            state.linear_acceleration = (actual_velocity - state.linear_velocity) / dt
+            state.angular_acceleration = (angular - state.angular_velocity) / dt
+            state.linear_velocity = actual_velocity
+            state.angular_velocity = angular
+            state.position = new_position
+            if yaw_rate:
+                state.orientation = quat_normalize(
+                    quat_multiply(quat_from_rpy(0.0, 0.0, yaw_rate * dt), state.orientation)
+                )
+
+
+def body_to_world_velocity(orientation: np.ndarray, vx: float, vy: float, vz: float) -> np.ndarray:
+    """Velocity given in the yaw-rotated body frame (forward, right, down) in world NED."""
+    return rotate(quat_from_rpy(0.0, 0.0, yaw_of(orientation)), np.array([vx, vy, vz], dtype=float))

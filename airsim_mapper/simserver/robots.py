@@ -1,0 +1,375 @@
+"""One robot of a loaded scene: its kinematic body, its sensor streams and its service methods.
+
+Motion commands (Takeoff, Move*, Rotate*, Land, GoHome, Hover) are served on the calling service worker:
+the handler starts the command and waits until it ends, so the reply comes when the motion is finished,
+`true` on success and `false` when pre-empted or timed out (protocol.md §3.3).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from airsim_mapper.simserver import messages
+from airsim_mapper.simserver.clock import SimClock
+from airsim_mapper.simserver.messages import MessageError
+from airsim_mapper.simserver.motion import (
+    TAKEOFF_HEIGHT_M,
+    TAKEOFF_SPEED,
+    Body,
+    Command,
+    Hold,
+    Land,
+    Path,
+    Rotate,
+    Velocity,
+    YawMode,
+    body_to_world_velocity,
+)
+from airsim_mapper.simserver.scene import RobotSpec, SceneSpec, ned_to_geo
+from airsim_mapper.simserver.services import Method, ServiceError
+from airsim_mapper.simserver.streams import (
+    CameraStream,
+    InstrumentStream,
+    LidarStream,
+    RadarStream,
+    RotorStream,
+)
+from airsim_mapper.simserver.topics import TopicHub
+
+COLLISION_RADIUS_M = 0.4
+COLLISION_REPEAT_NS = 100_000_000
+MOVE_PARAMS = ("duration", "drivetrain", "yaw_is_rate", "yaw")
+PATH_PARAMS = (
+    "velocity",
+    "timeout_sec",
+    "drivetrain",
+    "yaw_is_rate",
+    "yaw",
+    "lookahead",
+    "adaptive_lookahead",
+)
+
+
+def _float(params: dict[str, Any], key: str) -> float:
+    value = params[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ServiceError(f"Parameter '{key}' must be a number, got {value!r}", code=2.0)
+    return float(value)
+
+
+def _timeout(params: dict[str, Any]) -> float:
+    value = _float(params, "timeout_sec")
+    return value if value > 0 and math.isfinite(value) else math.inf
+
+
+def _yaw_mode(params: dict[str, Any]) -> YawMode:
+    return YawMode(bool(params["yaw_is_rate"]), _float(params, "yaw"), int(params["drivetrain"]))
+
+
+class RobotRuntime:
+    """A robot of the running scene."""
+
+    def __init__(self, scene: SceneSpec, spec: RobotSpec, world: Any, hub: TopicHub, clock: SimClock) -> None:
+        self.scene, self.spec, self.world, self.hub, self.clock = scene, spec, world, hub, clock
+        self.prefix = scene.robot_prefix(spec.name)
+        self.body = Body(spec.position, spec.orientation, self.ground_z)
+        self.pose_path = f"{self.prefix}/actual_pose"
+        self.collision_path = f"{self.prefix}/collision_info"
+        self.last_collision_ns: int | None = None
+        self.in_contact: str | None = None
+        start_ns = clock.now_ns()
+        self.cameras: dict[str, CameraStream] = {}
+        self.heavy: list[LidarStream | RadarStream] = []
+        self.instruments: list[InstrumentStream] = []
+        self.getters: dict[str, InstrumentStream] = {}
+        for sensor in spec.sensors:
+            sensor_prefix = scene.sensor_prefix(spec.name, sensor.id)
+            if sensor.type == "camera":
+                self.cameras[sensor.id] = CameraStream(sensor, sensor_prefix, self.body, world, hub)
+            elif sensor.type == "lidar":
+                self.heavy.append(LidarStream(sensor, sensor_prefix, self.body, world, hub))
+            elif sensor.type == "radar":
+                self.heavy.append(RadarStream(sensor, sensor_prefix, self.body, world, hub))
+            else:
+                stream = InstrumentStream(
+                    sensor, sensor_prefix, self.body, world, hub, scene.home_geo, start_ns
+                )
+                self.instruments.append(stream)
+                self.getters[stream.path] = stream
+        self.rotors = RotorStream(f"{self.prefix}/rotor_info", dict(spec.config), self.body, hub)
+
+    # -- world queries
+
+    def ground_z(self, position: np.ndarray) -> float:
+        """z of the first surface straight below `position` (the ground plane if the world misses)."""
+        if self.world is None:
+            return 0.0
+        hits = self.world.raycast(np.asarray(position, dtype=float), np.array([[0.0, 0.0, 1.0]]), 1000.0)
+        distance = float(hits.distance[0])
+        return float(position[2]) + distance if math.isfinite(distance) else 0.0
+
+    def _blocked(self, old: np.ndarray, new: np.ndarray) -> bool:
+        """Veto a move that goes deeper into an object; report the collision on collision_info."""
+        if self.world is None:
+            return False
+        contact = self.world.collide_sphere(new, COLLISION_RADIUS_M)
+        if contact is None:
+            self.in_contact = None
+            return False
+        now = self.clock.now_ns()
+        if (
+            self.in_contact != contact.object_name
+            or self.last_collision_ns is None
+            or now - self.last_collision_ns >= COLLISION_REPEAT_NS
+        ):
+            self.hub.publish(self.collision_path, messages.collision_info(now, contact))
+            self.last_collision_ns = now
+        self.in_contact = contact.object_name
+        before = self.world.collide_sphere(old, COLLISION_RADIUS_M)
+        return before is None or contact.penetration_depth > before.penetration_depth
+
+    # -- ticking
+
+    def tick(self, dt_s: float) -> None:
+        self.body.tick(dt_s, self._blocked)
+
+    def publish_pose(self, now_ns: int) -> None:
+        kin = self.body.snapshot()
+        self.hub.publish(self.pose_path, messages.pose_stamped(now_ns, kin.position, kin.orientation))
+
+    def step_instruments(self, now_ns: int) -> None:
+        for stream in self.instruments:
+            stream.step(now_ns)
+        if self.spec.multirotor:
+            self.rotors.step(now_ns)
+
+    def step_heavy(self, now_ns: int) -> bool:
+        worked = False
+        for camera in self.cameras.values():
+            worked = camera.step(now_ns) or worked
+        for stream in self.heavy:
+            worked = stream.step(now_ns) or worked
+        return worked
+
+    def start(self) -> None:
+        now = self.clock.now_ns()
+        self.publish_pose(now)
+        for camera in self.cameras.values():
+            camera.publish_infos()
+        self.step_instruments(now)
+
+    def stop(self) -> None:
+        self.body.cancel()
+
+    # -- service methods
+
+    def methods(self) -> list[Method]:
+        p = self.prefix
+        table: list[Method] = [
+            Method(f"{p}/GetGroundTruthKinematics", (), self._get_kinematics),
+            Method(f"{p}/GetEstimatedKinematics", (), self._get_kinematics),
+            Method(f"{p}/SetGroundTruthKinematics", ("kinematics",), self._set_kinematics),
+            Method(f"{p}/GetGroundTruthPose", (), self._get_pose),
+            Method(f"{p}/SetPose", ("pose", "reset_kinematics"), self._set_pose),
+            Method(f"{p}/GetGroundTruthGeoLocation", (), self._get_geo),
+            Method(f"{p}/GetEstimatedGeoLocation", (), self._get_geo),
+            Method(f"{p}/SetExternalForce", ("ext_force",), lambda _: True),
+            Method(f"{p}/GetReadyState", (), self._ready_state),
+            Method(f"{p}/CancelLastTask", (), lambda _: self.body.cancel()),
+        ]
+        for path, stream in self.getters.items():
+            table.append(Method(path, (), self._getter(stream)))
+        for camera_id, camera in self.cameras.items():
+            table += self._camera_methods(self.scene.sensor_prefix(self.spec.name, camera_id), camera)
+        if self.spec.multirotor:
+            table += self._multirotor_methods()
+        return table
+
+    def _getter(self, stream: InstrumentStream) -> Callable[[dict[str, Any]], Any]:
+        def get(_: dict[str, Any]) -> Any:
+            message = stream.message(self.clock.now_ns())
+            if message is None:
+                raise ServiceError(f"sensor '{stream.sensor.id}' is not available in this server build")
+            return message
+
+        return get
+
+    def _get_kinematics(self, _: dict[str, Any]) -> dict[str, Any]:
+        return messages.kinematics(self.clock.now_ns(), self.body.snapshot())
+
+    def _set_kinematics(self, params: dict[str, Any]) -> bool:
+        try:
+            kin = messages.parse_kinematics(params["kinematics"])
+        except MessageError as exc:
+            raise ServiceError(str(exc), code=2.0) from exc
+        self.body.teleport(kin.position, kin.orientation, reset_kinematics=True)
+        with self.body.lock:
+            self.body.state.linear_velocity = kin.linear_velocity
+            self.body.state.angular_velocity = kin.angular_velocity
+        return True
+
+    def _get_pose(self, _: dict[str, Any]) -> dict[str, Any]:
+        kin = self.body.snapshot()
+        return messages.transform(kin.position, kin.orientation)
+
+    def _set_pose(self, params: dict[str, Any]) -> bool:
+        try:
+            position, orientation = messages.parse_transform(params["pose"])
+        except MessageError as exc:
+            raise ServiceError(str(exc), code=2.0) from exc
+        self.body.teleport(position, orientation, bool(params["reset_kinematics"]))
+        self.publish_pose(self.clock.now_ns())
+        return True
+
+    def on_desired_pose(self, _path: str, message: Any) -> None:
+        """A client MESSAGE on desired_pose teleports the robot."""
+        position, orientation = messages.parse_pose_stamped(message)
+        self.body.teleport(position, orientation, reset_kinematics=True)
+        self.publish_pose(self.clock.now_ns())
+
+    def _get_geo(self, _: dict[str, Any]) -> dict[str, float]:
+        lat, lon, alt = ned_to_geo(self.body.snapshot().position, self.scene.home_geo)
+        return {"latitude": lat, "longitude": lon, "altitude": alt}
+
+    def _ready_state(self, _: dict[str, Any]) -> dict[str, Any]:
+        return {"time_stamp": self.clock.now_ns(), "ready_val": True, "ready_message": ""}
+
+    # -- cameras
+
+    def _camera_methods(self, path: str, camera: CameraStream) -> list[Method]:
+        def get_images(params: dict[str, Any]) -> dict[str, Any]:
+            ids = params["image_type_ids"]
+            if not isinstance(ids, list):
+                raise ServiceError(f"image_type_ids must be a list, got {ids!r}", code=2.0)
+            return camera.get_images(ids, self.clock.now_ns)
+
+        def set_pose(params: dict[str, Any]) -> bool:
+            try:
+                camera.set_pose(*messages.parse_transform(params["pose"]))
+            except MessageError as exc:
+                raise ServiceError(str(exc), code=2.0) from exc
+            return True
+
+        def reset_pose(_: dict[str, Any]) -> bool:
+            camera.reset_pose()
+            return True
+
+        def set_fov(params: dict[str, Any]) -> bool:
+            image_type = int(params["image_type_id"])
+            if image_type in camera.fov:
+                camera.fov[image_type] = _float(params, "field_of_view")
+            return True
+
+        def look_at(params: dict[str, Any]) -> bool:
+            return self.world is not None and self.world.object_named(str(params["object_name"])) is not None
+
+        accept = lambda _: True  # noqa: E731 - settings this renderer does not model
+        return [
+            Method(f"{path}/GetImages", ("image_type_ids",), get_images),
+            Method(f"{path}/SetPose", ("pose", "wait_for_pose_update"), set_pose),
+            Method(f"{path}/ResetCameraPose", ("wait_for_pose_update",), reset_pose),
+            Method(f"{path}/LookAtObject", ("object_name", "wait_for_pose_update"), look_at),
+            Method(f"{path}/DrawFrustum", ("image_type", "to_enable"), accept),
+            Method(f"{path}/SetFieldOfView", ("image_type_id", "field_of_view"), set_fov),
+            Method(f"{path}/SetFocalLength", ("image_type_id", "focal_length"), accept),
+            Method(f"{path}/SetChromaticAberrationIntensity", ("image_type_id", "intensity"), accept),
+            Method(f"{path}/SetDepthOfFieldFocalRegion", ("image_type_id", "focal_length"), accept),
+            Method(
+                f"{path}/SetDepthOfFieldTransitionRegion", ("image_type_id", "transition_threshold"), accept
+            ),
+        ]
+
+    # -- multirotor
+
+    def _run(self, command: Command) -> bool:
+        self.body.run(command)
+        return command.wait()
+
+    def _flag(self, name: str, value: bool) -> Callable[[dict[str, Any]], bool]:
+        def set_flag(_: dict[str, Any]) -> bool:
+            setattr(self.body, name, value)
+            return True
+
+        return set_flag
+
+    def _takeoff(self, params: dict[str, Any]) -> bool:
+        kin = self.body.snapshot()
+        target_z = min(kin.position[2], self.ground_z(kin.position) - TAKEOFF_HEIGHT_M)
+        target = np.array([kin.position[0], kin.position[1], target_z])
+        return self._run(Path([target], TAKEOFF_SPEED, YawMode(True, 0.0), _timeout(params)))
+
+    def _go_home(self, params: dict[str, Any]) -> bool:
+        speed = _float(params, "velocity")
+        return self._run(
+            Path([self.body.home], speed if speed > 0 else 5.0, YawMode(True, 0.0), _timeout(params))
+        )
+
+    def _velocity(self, body_frame: bool, hold_z: bool) -> Callable[[dict[str, Any]], bool]:
+        def move(params: dict[str, Any]) -> bool:
+            vx, vy = _float(params, "vx"), _float(params, "vy")
+            vz = 0.0 if hold_z else _float(params, "vz")
+            velocity = np.array([vx, vy, vz])
+            if body_frame:
+                velocity = body_to_world_velocity(self.body.snapshot().orientation, vx, vy, vz)
+            z = _float(params, "z") if hold_z else None
+            return self._run(Velocity(velocity, _float(params, "duration"), _yaw_mode(params), z))
+
+        return move
+
+    def _move_to(self, params: dict[str, Any]) -> bool:
+        target = [_float(params, "x"), _float(params, "y"), _float(params, "z")]
+        return self._run(Path([target], _float(params, "velocity"), _yaw_mode(params), _timeout(params)))
+
+    def _move_on_path(self, params: dict[str, Any]) -> bool:
+        path = params["path"]
+        if not isinstance(path, list) or not all(isinstance(p, list) and len(p) == 3 for p in path):
+            raise ServiceError(f"path must be a list of [x, y, z] points, got {path!r}", code=2.0)
+        return self._run(Path(path, _float(params, "velocity"), _yaw_mode(params), _timeout(params)))
+
+    def _rotate_to(self, params: dict[str, Any]) -> bool:
+        command = Rotate(
+            _float(params, "yaw"),
+            _float(params, "yaw_rate"),
+            margin=_float(params, "margin"),
+            timeout_s=_timeout(params),
+        )
+        return self._run(command)
+
+    def _rotate_by(self, params: dict[str, Any]) -> bool:
+        return self._run(Rotate(None, _float(params, "yaw_rate"), duration=_float(params, "duration")))
+
+    def _multirotor_methods(self) -> list[Method]:
+        p = self.prefix
+        ok = lambda _: True  # noqa: E731 - modes this kinematic model does not distinguish
+        return [
+            Method(f"{p}/EnableApiControl", (), self._flag("api_control", True)),
+            Method(f"{p}/DisableApiControl", (), self._flag("api_control", False)),
+            Method(f"{p}/IsApiControlEnabled", (), lambda _: self.body.api_control),
+            Method(f"{p}/Arm", (), self._flag("armed", True)),
+            Method(f"{p}/Disarm", (), self._flag("armed", False)),
+            Method(f"{p}/CanArm", (), lambda _: True),
+            Method(f"{p}/GetLandedState", (), lambda _: 0 if self.body.landed() else 1),
+            Method(f"{p}/Takeoff", ("timeout_sec",), self._takeoff),
+            Method(f"{p}/Land", ("timeout_sec",), lambda params: self._run(Land(_timeout(params)))),
+            Method(f"{p}/GoHome", ("timeout_sec", "velocity"), self._go_home),
+            Method(f"{p}/Hover", (), lambda _: self._run(Hold())),
+            Method(f"{p}/MoveByVelocity", ("vx", "vy", "vz", *MOVE_PARAMS), self._velocity(False, False)),
+            Method(f"{p}/MoveByVelocityZ", ("vx", "vy", "z", *MOVE_PARAMS), self._velocity(False, True)),
+            Method(
+                f"{p}/MoveByVelocityBodyFrame", ("vx", "vy", "vz", *MOVE_PARAMS), self._velocity(True, False)
+            ),
+            Method(
+                f"{p}/MoveByVelocityBodyFrameZ", ("vx", "vy", "z", *MOVE_PARAMS), self._velocity(True, True)
+            ),
+            Method(f"{p}/MoveToPosition", ("x", "y", "z", *PATH_PARAMS), self._move_to),
+            Method(f"{p}/MoveOnPath", ("path", *PATH_PARAMS), self._move_on_path),
+            Method(f"{p}/RotateToYaw", ("yaw", "timeout_sec", "margin", "yaw_rate"), self._rotate_to),
+            Method(f"{p}/RotateByYawRate", ("yaw_rate", "duration"), self._rotate_by),
+            Method(f"{p}/RequestControl", (), ok),
+            Method(f"{p}/SetMissionMode", (), ok),
+            Method(f"{p}/SetVTOLMode", ("vtol_mode",), ok),
+        ]

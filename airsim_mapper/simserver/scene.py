@@ -1,0 +1,356 @@
+"""Scene configuration as the server receives it from `/Sim/LoadScene` (one merged JSON document).
+
+`parse_scene` validates what the server needs and returns immutable specs; `topic_table` lists the topics
+the real server registers for that scene (protocol.md §4): per robot `actual_pose`, `desired_pose`,
+`collision_info`, `rotor_info`; per enabled sensor its leaves; per capture-enabled camera setting the image
+topic and its `_info` topic, except type 5 whose info topic has the image topic's own name (a real-server
+quirk reproduced here: one row, message type `image`, whose cached value at scene start is CameraInfo).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin, quat_from_rpy
+from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
+
+IMAGE_TYPE_NAMES = {
+    0: "scene_camera",
+    1: "depth_planar_camera",
+    2: "depth_camera",
+    3: "segmentation_camera",
+    4: "depth_vis_camera",
+    5: "disparity_normalized_camera",
+    6: "surface_normals_camera",
+}
+DISPARITY_NORMALIZED = 5
+
+SENSOR_LEAVES = {
+    "imu": ("imu_kinematics", "imu", 100),
+    "gps": ("gps", "", 100),
+    "barometer": ("barometer", "barometer", 100),
+    "magnetometer": ("magnetometer", "magnetometer", 100),
+    "distance-sensor": ("distance_sensor", "distance-sensor", 60),
+    "battery": ("battery", "", 100),
+    "airspeed": ("airspeed", "", 100),
+    "lidar": ("lidar", "lidar", 60),
+}
+SENSOR_TYPES = frozenset({"camera", "radar", *SENSOR_LEAVES})
+CLOCK_TYPES = frozenset({"steppable", "real-time"})
+DEFAULT_HOME = (47.641468, -122.140165, 122.0)
+EARTH_RADIUS_M = 6378137.0
+
+
+class SceneError(ValueError):
+    """The scene configuration cannot be loaded; the message says what is wrong."""
+
+
+@dataclass(frozen=True)
+class CaptureSetting:
+    image_type: int
+    width: int
+    height: int
+    fov_deg: float
+    capture_enabled: bool
+    streaming_enabled: bool
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    id: str
+    type: str
+    config: Mapping[str, Any]
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    orientation: np.ndarray = field(default_factory=lambda: IDENTITY_Q.copy())
+    captures: tuple[CaptureSetting, ...] = ()
+    capture_interval: float = 5.0
+
+    def enabled_captures(self) -> tuple[CaptureSetting, ...]:
+        return tuple(c for c in self.captures if c.capture_enabled)
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    name: str
+    position: np.ndarray
+    orientation: np.ndarray
+    config: Mapping[str, Any]
+    sensors: tuple[SensorSpec, ...]
+
+    @property
+    def multirotor(self) -> bool:
+        return isinstance(self.config.get("controller"), Mapping)
+
+
+@dataclass(frozen=True)
+class ClockSpec:
+    type: str = "steppable"
+    step_ns: int = 3_000_000
+    pause_on_start: bool = False
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    id: str
+    robots: tuple[RobotSpec, ...]
+    clock: ClockSpec
+    home_geo: tuple[float, float, float]
+
+    @property
+    def prefix(self) -> str:
+        return f"/Sim/{self.id}"
+
+    def robot_prefix(self, robot: str) -> str:
+        return f"{self.prefix}/robots/{robot}"
+
+    def sensor_prefix(self, robot: str, sensor: str) -> str:
+        return f"{self.prefix}/robots/{robot}/sensors/{sensor}"
+
+
+def default_scene() -> SceneSpec:
+    """The scene served before any load: `SceneBasicDrone` with one sensorless drone at 4 m."""
+    robot = RobotSpec(
+        "Drone1",
+        np.array([0.0, 0.0, -4.0]),
+        IDENTITY_Q.copy(),
+        {"controller": {"type": "simple-flight-api"}},
+        (),
+    )
+    return SceneSpec("SceneBasicDrone", (robot,), ClockSpec(), DEFAULT_HOME)
+
+
+# ---------------------------------------------------------------------------------------------- parsing
+
+
+def _require(mapping: Mapping[str, Any], key: str, where: str) -> Any:
+    if key not in mapping:
+        raise SceneError(f"{where} has no '{key}'")
+    return mapping[key]
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SceneError(f"{where} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def geo_to_ned(geo: tuple[float, float, float], home: tuple[float, float, float]) -> np.ndarray:
+    """Flat-earth NED offset of a geo point (lat, lon, alt) from the home point."""
+    lat0 = math.radians(home[0])
+    north = math.radians(geo[0] - home[0]) * EARTH_RADIUS_M
+    east = math.radians(geo[1] - home[1]) * EARTH_RADIUS_M * math.cos(lat0)
+    return np.array([north, east, home[2] - geo[2]])
+
+
+def ned_to_geo(ned: np.ndarray, home: tuple[float, float, float]) -> tuple[float, float, float]:
+    lat0 = math.radians(home[0])
+    lat = home[0] + math.degrees(float(ned[0]) / EARTH_RADIUS_M)
+    lon = home[1] + math.degrees(float(ned[1]) / (EARTH_RADIUS_M * max(math.cos(lat0), 1e-9)))
+    return lat, lon, home[2] - float(ned[2])
+
+
+def _origin(origin: Any, where: str, home: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    if origin is None:
+        return np.zeros(3), IDENTITY_Q.copy()
+    if not isinstance(origin, Mapping):
+        raise SceneError(f"{where} origin must be an object, got {origin!r}")
+    try:
+        if "geo-point" in origin:
+            parts = str(origin["geo-point"]).split()
+            if len(parts) != 3:
+                raise SceneError(f"{where} origin 'geo-point' must hold three numbers")
+            position = geo_to_ned(tuple(float(p) for p in parts), home)  # type: ignore[arg-type]
+            _, orientation = parse_origin({k: v for k, v in origin.items() if k != "geo-point"})
+            return position, orientation
+        return parse_origin(origin)
+    except (OriginError, ValueError) as exc:
+        if isinstance(exc, SceneError):
+            raise
+        raise SceneError(f"{where}: {exc}") from exc
+
+
+def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ...]:
+    settings = sensor.get("capture-settings", [])
+    if not isinstance(settings, list):
+        raise SceneError(f"{where} 'capture-settings' must be a list")
+    captures = []
+    for item in settings:
+        if not isinstance(item, Mapping):
+            raise SceneError(f"{where} capture setting must be an object, got {item!r}")
+        image_type = item.get("image-type")
+        if (
+            isinstance(image_type, bool)
+            or not isinstance(image_type, int)
+            or image_type not in IMAGE_TYPE_NAMES
+        ):
+            raise SceneError(f"{where} has an invalid 'image-type' {image_type!r} (expected 0..6)")
+        here = f"{where} image-type {image_type}"
+        width = int(_number(item.get("width", 256), f"{here} 'width'"))
+        height = int(_number(item.get("height", 144), f"{here} 'height'"))
+        if width <= 0 or height <= 0:
+            raise SceneError(f"{here} must have a positive width and height, got {width}x{height}")
+        fov = _number(item.get("fov-degrees", 90.0), f"{here} 'fov-degrees'")
+        if not 0.0 < fov < 180.0:
+            raise SceneError(f"{here} 'fov-degrees' must be in (0, 180), got {fov}")
+        captures.append(
+            CaptureSetting(
+                image_type,
+                width,
+                height,
+                fov,
+                bool(item.get("capture-enabled", False)),
+                bool(item.get("streaming-enabled", False)),
+            )
+        )
+    return tuple(captures)
+
+
+def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> SensorSpec | None:
+    if not isinstance(sensor, Mapping):
+        raise SceneError(f"{where} sensor must be an object, got {sensor!r}")
+    sensor_id = _require(sensor, "id", f"{where} sensor")
+    sensor_type = _require(sensor, "type", f"{where} sensor '{sensor_id}'")
+    here = f"{where} sensor '{sensor_id}'"
+    if sensor_type not in SENSOR_TYPES:
+        raise SceneError(f"{here} has unknown type '{sensor_type}'")
+    if not sensor.get("enabled", False):
+        return None
+    position, orientation = _origin(sensor.get("origin"), here, home)
+    captures = _captures(sensor, here) if sensor_type == "camera" else ()
+    interval = _number(sensor.get("capture-interval", 5.0), f"{here} 'capture-interval'")
+    if interval <= 0:
+        raise SceneError(f"{here} 'capture-interval' must be positive, got {interval}")
+    return SensorSpec(str(sensor_id), sensor_type, sensor, position, orientation, captures, interval)
+
+
+def _robot(actor: Mapping[str, Any], index: int, home: tuple[float, float, float]) -> RobotSpec:
+    name = _require(actor, "name", f"actor #{index}")
+    if not isinstance(name, str) or not name:
+        raise SceneError(f"actor #{index} 'name' must be a non-empty string")
+    where = f"robot '{name}'"
+    config = _require(actor, "robot-config", where)
+    if not isinstance(config, Mapping):
+        raise SceneError(
+            f"{where} 'robot-config' must be the inlined robot config object, got {type(config).__name__} "
+            "(the client inlines robot files before LoadScene)"
+        )
+    position, orientation = _origin(_require(actor, "origin", where), where, home)
+    sensors_cfg = config.get("sensors", [])
+    if not isinstance(sensors_cfg, list):
+        raise SceneError(f"{where} 'sensors' must be a list")
+    sensors = [s for s in (_sensor(item, where, home) for item in sensors_cfg) if s is not None]
+    ids = [s.id for s in sensors]
+    duplicates = sorted({i for i in ids if ids.count(i) > 1})
+    if duplicates:
+        raise SceneError(f"{where} has duplicate sensor ids: {', '.join(duplicates)}")
+    return RobotSpec(name, position, orientation, config, tuple(sensors))
+
+
+def _clock(clock: Any) -> ClockSpec:
+    if clock is None:
+        return ClockSpec()
+    if not isinstance(clock, Mapping):
+        raise SceneError(f"scene 'clock' must be an object, got {clock!r}")
+    kind = clock.get("type", "steppable")
+    if kind not in CLOCK_TYPES:
+        raise SceneError(f"scene clock type '{kind}' is not supported (expected steppable or real-time)")
+    step_ns = int(_number(clock.get("step-ns", 3_000_000), "scene clock 'step-ns'"))
+    if step_ns <= 0:
+        raise SceneError(f"scene clock 'step-ns' must be positive, got {step_ns}")
+    return ClockSpec(kind, step_ns, bool(clock.get("pause-on-start", False)))
+
+
+def _home(home: Any) -> tuple[float, float, float]:
+    if not home:
+        return DEFAULT_HOME
+    if not isinstance(home, Mapping):
+        raise SceneError(f"scene 'home-geo-point' must be an object, got {home!r}")
+    return tuple(  # type: ignore[return-value]
+        _number(home.get(key, default), f"scene home-geo-point '{key}'")
+        for key, default in zip(("latitude", "longitude", "altitude"), DEFAULT_HOME)
+    )
+
+
+def parse_scene(text: str | bytes) -> SceneSpec:
+    """Validate the scene JSON sent with `/Sim/LoadScene`; raises SceneError naming the problem."""
+    try:
+        config = json.loads(text)
+    except (ValueError, TypeError) as exc:
+        raise SceneError(f"scene_config is not valid JSON: {exc}") from exc
+    if not isinstance(config, Mapping):
+        raise SceneError(f"scene_config must be a JSON object, got {type(config).__name__}")
+    scene_id = _require(config, "id", "scene config")
+    if not isinstance(scene_id, str) or not scene_id or "/" in scene_id:
+        raise SceneError(f"scene 'id' must be a non-empty string without '/', got {scene_id!r}")
+    actors = config.get("actors", [])
+    if not isinstance(actors, list):
+        raise SceneError("scene 'actors' must be a list")
+    home = _home(config.get("home-geo-point"))
+    robots = []
+    for index, actor in enumerate(actors):
+        if not isinstance(actor, Mapping):
+            raise SceneError(f"actor #{index} must be an object")
+        if actor.get("type") == "robot":
+            robots.append(_robot(actor, index, home))
+    names = [r.name for r in robots]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise SceneError(f"scene has duplicate robot names: {', '.join(duplicates)}")
+    return SceneSpec(scene_id, tuple(robots), _clock(config.get("clock")), home)
+
+
+# ---------------------------------------------------------------------------------------------- topics
+
+
+def camera_topics(prefix: str, sensor: SensorSpec) -> list[TopicInfo]:
+    rows = []
+    for capture in sensor.enabled_captures():
+        name = IMAGE_TYPE_NAMES[capture.image_type]
+        rows.append(TopicInfo(f"{prefix}/{name}", PUBLISHED, "image", 60))
+        if capture.image_type != DISPARITY_NORMALIZED:
+            rows.append(TopicInfo(f"{prefix}/{name}_info", PUBLISHED, "camera-info", 60))
+    return rows
+
+
+def info_topic_path(prefix: str, image_type: int) -> str:
+    """Where a camera's CameraInfo is published (type 5: on the image topic itself, the real quirk)."""
+    name = IMAGE_TYPE_NAMES[image_type]
+    return f"{prefix}/{name}" if image_type == DISPARITY_NORMALIZED else f"{prefix}/{name}_info"
+
+
+def sensor_topics(prefix: str, sensor: SensorSpec) -> list[TopicInfo]:
+    if sensor.type == "camera":
+        return camera_topics(prefix, sensor)
+    if sensor.type == "radar":
+        return [
+            TopicInfo(f"{prefix}/radar_detections", PUBLISHED, "", 60),
+            TopicInfo(f"{prefix}/radar_tracks", PUBLISHED, "", 60),
+        ]
+    leaf, message_type, frequency = SENSOR_LEAVES[sensor.type]
+    return [TopicInfo(f"{prefix}/{leaf}", PUBLISHED, message_type, frequency)]
+
+
+def topic_table(scene: SceneSpec) -> list[TopicInfo]:
+    """Every topic the scene registers, `/$topics` included, in path order."""
+    rows = [TopicInfo("/$topics", PUBLISHED, "topic-list", 0)]
+    for robot in scene.robots:
+        base = scene.robot_prefix(robot.name)
+        rows += [
+            TopicInfo(f"{base}/actual_pose", PUBLISHED, "", 0),
+            TopicInfo(f"{base}/desired_pose", SUBSCRIBED, "", 0),
+            TopicInfo(f"{base}/collision_info", PUBLISHED, "collision-info", 0),
+            TopicInfo(f"{base}/rotor_info", PUBLISHED, "", 0),
+        ]
+        for sensor in robot.sensors:
+            rows += sensor_topics(scene.sensor_prefix(robot.name, sensor.id), sensor)
+    return sorted(rows, key=lambda row: row.path)
+
+
+def yaw_quaternion(yaw: float) -> np.ndarray:
+    return quat_from_rpy(0.0, 0.0, yaw)

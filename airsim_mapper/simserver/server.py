@@ -1,0 +1,191 @@
+"""The headless server: sockets, the current scene, and the simulation and sensor threads."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from airsim_mapper.simserver.scene import SceneError, default_scene, parse_scene
+from airsim_mapper.simserver.services import Method, MethodTable, ServiceError, ServiceServer
+from airsim_mapper.simserver.session import Session, TrajectoryStore
+from airsim_mapper.simserver.topics import TopicHub
+
+LOG = logging.getLogger("airsim_mapper.simserver")
+
+DEFAULT_SCENE_PREFIX = "/Sim/SceneBasicDrone"
+NEVER_EXPIRES = 0xFFFFFFFFFFFFFFFF
+
+
+@dataclass(frozen=True)
+class ServerOptions:
+    address: str = "0.0.0.0"
+    topics_port: int = 8989
+    services_port: int = 8990
+    world_path: str | None = None
+    pose_rate_hz: float = 100.0
+    tick_rate_hz: float = 200.0
+    workers: int = 32
+
+
+def load_world_or_none(path: str | None) -> Any:
+    from airsim_mapper.simserver import world
+
+    return world.load_world(path)
+
+
+class SimServer:
+    """Owns both channels and the running scene; `start`, then `stop` (joins every thread)."""
+
+    def __init__(self, options: ServerOptions) -> None:
+        self.options = options
+        self.world = load_world_or_none(options.world_path)
+        self.table = MethodTable()
+        self.hub = TopicHub(options.address, options.topics_port)
+        self.services = ServiceServer(self.table, options.address, options.services_port, options.workers)
+        self._scene_lock = threading.Lock()
+        self._stopping = threading.Event()
+        self._default_trajectories = TrajectoryStore()
+        self.session: Session | None = None
+        self._session_methods: list[str] = []
+        self._register_sim_methods()
+        self._activate(Session(default_scene(), self.world, self.hub))
+        self._threads = [
+            threading.Thread(target=self._sim_loop, name="sim", daemon=True),
+            threading.Thread(target=self._sensor_loop, name="sensors", daemon=True),
+        ]
+
+    # -- lifecycle
+
+    def start(self) -> None:
+        self.hub.start()
+        self.services.start()
+        for thread in self._threads:
+            thread.start()
+        LOG.info("serving topics on %s and services on %s", self.hub.url, self.services.url)
+
+    def stop(self) -> None:
+        self._stopping.set()
+        if self.session is not None:
+            self.session.stop()
+        for thread in self._threads:
+            thread.join(timeout=5.0)
+        self.services.stop()
+        self.hub.stop()
+
+    # -- scenes
+
+    def _register_sim_methods(self) -> None:
+        self.table.register("/Sim/LoadScene", ("scene_config",), self._load_scene)
+        self.table.register("/Sim/Unsubscribe", ("topic_paths",), self._unsubscribe)
+        self.table.register("/Sim/SetInteractiveFeature", ("feature_id", "enable"), self._interactive_feature)
+        self.table.register("/Sim/GetBuildCommitHash", (), lambda _: "airsim-mapper-simserver")
+        self.table.register("/Sim/GetAuthorizationTokenPublicKey", (), lambda _: "")
+        self.table.register(
+            "/Sim/SetAuthorizationToken", ("token_encrypted_base64",), lambda _: NEVER_EXPIRES
+        )
+        self.table.register(
+            f"{DEFAULT_SCENE_PREFIX}/ImportNEDTrajectory",
+            (
+                "traj_name",
+                "time",
+                "pose_x",
+                "pose_y",
+                "pose_z",
+                "pose_roll",
+                "pose_pitch",
+                "pose_yaw",
+                "vel_x_lin",
+                "vel_y_lin",
+                "vel_z_lin",
+            ),
+            self._default_import,
+        )
+
+    def _default_import(self, params: dict[str, Any]) -> bool:
+        session = self.session
+        if session is not None and session.spec.prefix == DEFAULT_SCENE_PREFIX:
+            return session.trajectories.import_ned(params)
+        return self._default_trajectories.import_ned(params)
+
+    def _activate(self, session: Session) -> None:
+        """Swap in a new scene: methods, topic table (with `/$topics` cached) and initial publications."""
+        old = self.session
+        if old is not None:
+            old.stop()
+        methods = [m for m in session.methods() if m.name != f"{DEFAULT_SCENE_PREFIX}/ImportNEDTrajectory"]
+        self.table.replace_group(self._session_methods, methods)
+        self._session_methods = [m.name for m in methods]
+        self.hub.set_table(session.topics(), session.topic_handlers())
+        self.session = session
+        session.start()
+        LOG.info("scene %s loaded (%d robots)", session.spec.id, len(session.robots))
+
+    def _load_scene(self, params: dict[str, Any]) -> str:
+        text = params["scene_config"]
+        if not isinstance(text, (str, bytes)):
+            raise ServiceError(f"scene_config must be a JSON string, got {type(text).__name__}")
+        try:
+            spec = parse_scene(text)
+        except SceneError as exc:
+            raise ServiceError(f"Invalid scene config: {exc}") from exc
+        with self._scene_lock:
+            self._activate(Session(spec, self.world, self.hub))
+        return spec.id
+
+    def _unsubscribe(self, params: dict[str, Any]) -> bool:
+        paths = params["topic_paths"]
+        if isinstance(paths, str):
+            paths = [paths]
+        if not isinstance(paths, list):
+            raise ServiceError(f"topic_paths must be a list of topic paths, got {paths!r}")
+        return self.hub.unsubscribe(str(p) for p in paths)
+
+    @staticmethod
+    def _interactive_feature(params: dict[str, Any]) -> bool:
+        return params["feature_id"] == "viewport_camera"
+
+    # -- threads
+
+    def _sim_loop(self) -> None:
+        period = 1.0 / self.options.tick_rate_hz
+        pose_period = 1.0 / self.options.pose_rate_hz
+        next_tick = time.monotonic()
+        next_pose = next_tick
+        while not self._stopping.is_set():
+            now = time.monotonic()
+            publish_pose = now >= next_pose
+            if publish_pose:
+                next_pose = max(next_pose + pose_period, now - pose_period)
+            session = self.session
+            try:
+                if session is not None:
+                    session.tick(publish_pose)
+            except Exception:
+                LOG.exception("simulation tick failed")
+            next_tick += period
+            delay = next_tick - time.monotonic()
+            if delay > 0:
+                self._stopping.wait(delay)
+            else:
+                next_tick = time.monotonic()
+
+    def _sensor_loop(self) -> None:
+        while not self._stopping.is_set():
+            session = self.session
+            worked = False
+            try:
+                if session is not None:
+                    worked = session.sensor_tick()
+            except Exception:
+                LOG.exception("sensor step failed")
+                self._stopping.wait(0.1)
+            if not worked:
+                self._stopping.wait(0.002)
+
+
+def methods_of(server: SimServer) -> list[Method]:
+    """Every registered method (for diagnostics)."""
+    return [m for name in server.table.names() if (m := server.table.get(name)) is not None]

@@ -1,0 +1,134 @@
+"""A loaded scene: its clock, robots, scene-level service methods and topic handlers."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from airsim_mapper.simserver.clock import SimClock
+from airsim_mapper.simserver.robots import RobotRuntime
+from airsim_mapper.simserver.scene import SceneSpec, topic_table
+from airsim_mapper.simserver.services import Method, ServiceError
+from airsim_mapper.simserver.topics import TopicHub, TopicInfo
+
+TRAJECTORY_KEYS = (
+    "time",
+    "pose_x",
+    "pose_y",
+    "pose_z",
+    "pose_roll",
+    "pose_pitch",
+    "pose_yaw",
+    "vel_x_lin",
+    "vel_y_lin",
+    "vel_z_lin",
+)
+
+
+class TrajectoryStore:
+    """Imported NED trajectories by name; importing an existing name again returns False."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._items: dict[str, dict[str, list[float]]] = {}
+
+    def import_ned(self, params: dict[str, Any]) -> bool:
+        name = str(params["traj_name"])
+        lengths = {len(params[k]) if isinstance(params[k], list) else -1 for k in TRAJECTORY_KEYS}
+        if len(lengths) != 1 or -1 in lengths:
+            raise ServiceError(
+                f"trajectory '{name}' needs lists of equal length for {', '.join(TRAJECTORY_KEYS)}"
+            )
+        with self._lock:
+            if name in self._items:
+                return False
+            self._items[name] = {k: [float(v) for v in params[k]] for k in TRAJECTORY_KEYS}
+            return True
+
+
+class Session:
+    """Everything that exists while one scene is loaded."""
+
+    def __init__(self, spec: SceneSpec, world: Any, hub: TopicHub) -> None:
+        self.spec = spec
+        self.hub = hub
+        self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start)
+        self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock) for r in spec.robots}
+        self.trajectories = TrajectoryStore()
+        self.last_tick_ns = self.clock.now_ns()
+        self.started_ns = self.last_tick_ns
+
+    def topics(self) -> list[TopicInfo]:
+        return topic_table(self.spec)
+
+    def topic_handlers(self) -> dict[str, Any]:
+        return {f"{r.prefix}/desired_pose": r.on_desired_pose for r in self.robots.values()}
+
+    def methods(self) -> list[Method]:
+        p = self.spec.prefix
+        clock = self.clock
+        table = [
+            Method(f"{p}/GetSimClockType", (), lambda _: clock.kind),
+            Method(f"{p}/GetSimTime", (), lambda _: clock.now_ns()),
+            Method(f"{p}/Pause", ("do_pause",), lambda a: clock.pause(bool(a["do_pause"]))),
+            Method(f"{p}/IsPaused", (), lambda _: clock.is_paused()),
+            Method(
+                f"{p}/ContinueForSimTime",
+                ("delta_time", "wait_until_complete"),
+                lambda a: clock.continue_for(int(a["delta_time"]), bool(a["wait_until_complete"])),
+            ),
+            Method(
+                f"{p}/ContinueUntilSimTime",
+                ("target_time", "wait_until_complete"),
+                lambda a: clock.continue_until(int(a["target_time"]), bool(a["wait_until_complete"])),
+            ),
+            Method(
+                f"{p}/ContinueForNSteps",
+                ("n_steps", "wait_until_complete"),
+                lambda a: clock.continue_for(
+                    int(a["n_steps"]) * clock.step_ns, bool(a["wait_until_complete"]), "ContinueForNSteps"
+                ),
+            ),
+            Method(
+                f"{p}/ContinueForSingleStep",
+                ("wait_until_complete",),
+                lambda a: clock.continue_for(
+                    clock.step_ns, bool(a["wait_until_complete"]), "ContinueForSingleStep"
+                ),
+            ),
+            Method(f"{p}/ListActors", (), lambda _: list(self.robots)),
+            Method(f"{p}/ImportNEDTrajectory", ("traj_name", *TRAJECTORY_KEYS), self.trajectories.import_ned),
+            Method(f"{p}/SwitchStreamingView", (), lambda _: True),
+        ]
+        for robot in self.robots.values():
+            table += robot.methods()
+        return table
+
+    # -- running
+
+    def start(self) -> None:
+        for robot in self.robots.values():
+            robot.start()
+
+    def stop(self) -> None:
+        for robot in self.robots.values():
+            robot.stop()
+
+    def tick(self, publish_pose: bool) -> None:
+        """Simulation thread: integrate motion by the sim time elapsed, publish pose and instruments."""
+        now = self.clock.now_ns()
+        dt = (now - self.last_tick_ns) / 1e9
+        self.last_tick_ns = now
+        for robot in self.robots.values():
+            robot.tick(dt)
+            if publish_pose:
+                robot.publish_pose(now)
+            robot.step_instruments(now)
+
+    def sensor_tick(self) -> bool:
+        """Sensor thread: render and scan what is due; True if anything was produced."""
+        now = self.clock.now_ns()
+        worked = False
+        for robot in self.robots.values():
+            worked = robot.step_heavy(now) or worked
+        return worked

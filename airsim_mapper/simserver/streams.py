@@ -1,0 +1,371 @@
+"""Sensor streams: when each sensor of a robot renders or measures, and where its messages go.
+
+Cameras, lidars and radars are heavy (ray casts) and run on the sensor thread; instruments (IMU, GPS, ...)
+and rotor info are cheap and run on the simulation thread. Heavy sensors work only while someone
+subscribes (or a GetImages call waits); instruments publish at their nominal rate while subscribed and
+refresh their cached value about once a second otherwise, so a new subscriber always gets a recent value.
+The sensor modules (camera, lidar, radar, instruments) are pure numpy and are written by the sensors side.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+import numpy as np
+
+from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
+from airsim_mapper.simserver import messages, protocol
+from airsim_mapper.simserver.motion import Body, Kinematic
+from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
+from airsim_mapper.simserver.services import ServiceError
+from airsim_mapper.simserver.topics import TopicHub
+
+LOG = logging.getLogger("airsim_mapper.simserver.streams")
+
+GET_IMAGES_TIMEOUT_S = 5.0
+IDLE_REFRESH_NS = 1_000_000_000
+
+
+def sensor_module(name: str) -> Any | None:
+    """A sensor module of this package, or None (logged) while it is not available."""
+    try:
+        return importlib.import_module(f"airsim_mapper.simserver.{name}")
+    except ImportError as exc:
+        LOG.warning("sensor module %s is not available (%s); its topics stay silent", name, exc)
+        return None
+
+
+def mount_pose(
+    kin: Kinematic, offset_position: np.ndarray, offset_orientation: np.ndarray, gimbal: dict | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """World pose of a sensor mounted at an offset on the robot; gimbal locks drop robot roll/pitch."""
+    body_q = kin.orientation
+    if gimbal:
+        roll, pitch, yaw = rpy_from_quat(body_q)
+        body_q = quat_from_rpy(
+            0.0 if gimbal.get("lock-roll") else roll,
+            0.0 if gimbal.get("lock-pitch") else pitch,
+            0.0 if gimbal.get("lock-yaw") else yaw,
+        )
+    return compose(kin.position, body_q, offset_position, offset_orientation)
+
+
+class Schedule:
+    """Fires every `period_ns` of sim time (the first time at once)."""
+
+    def __init__(self, period_ns: int) -> None:
+        self.period_ns = max(1, int(period_ns))
+        self.next_ns: int | None = None
+
+    def due(self, now_ns: int) -> bool:
+        if self.next_ns is None or now_ns >= self.next_ns:
+            base = now_ns if self.next_ns is None or now_ns - self.next_ns > self.period_ns else self.next_ns
+            self.next_ns = base + self.period_ns
+            return True
+        return False
+
+
+class CameraStream:
+    """One camera: renders the capture-enabled types that are subscribed or requested by GetImages."""
+
+    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: Any, hub: TopicHub) -> None:
+        self.sensor = sensor
+        self.prefix = prefix
+        self.body = body
+        self.world = world
+        self.hub = hub
+        self.captures = {c.image_type: c for c in sensor.enabled_captures()}
+        self.fov = {t: c.fov_deg for t, c in self.captures.items()}
+        self.offset_position = np.array(sensor.position, dtype=float)
+        self.offset_orientation = np.array(sensor.orientation, dtype=float)
+        gimbal = sensor.config.get("gimbal")
+        self.gimbal = dict(gimbal) if isinstance(gimbal, dict) else None
+        self.schedule = Schedule(int(sensor.capture_interval * 1e9))
+        self.module = sensor_module("camera")
+        self._cond = threading.Condition()
+        self._requests: dict[int, int] = {}  # image type -> number of waiting GetImages calls
+        self._request_time_ns = -1
+        self._latest: dict[int, dict[str, Any]] = {}
+        self._latest_ns = -1
+
+    def topic(self, image_type: int) -> str:
+        return f"{self.prefix}/{IMAGE_TYPE_NAMES[image_type]}"
+
+    def publish_infos(self) -> None:
+        """CameraInfo once at scene start (cached; type 5 lands on its image topic, the real quirk)."""
+        if self.module is None:
+            return
+        for image_type, capture in self.captures.items():
+            info = self.module.camera_info_message(capture.width, capture.height, capture.fov_deg)
+            self.hub.publish(info_topic_path(self.prefix, image_type), info)
+
+    def set_pose(self, position: np.ndarray, orientation: np.ndarray) -> None:
+        with self._cond:
+            self.offset_position, self.offset_orientation = position, orientation
+
+    def reset_pose(self) -> None:
+        self.set_pose(
+            np.array(self.sensor.position, dtype=float), np.array(self.sensor.orientation, dtype=float)
+        )
+
+    def world_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        with self._cond:
+            offset = (self.offset_position.copy(), self.offset_orientation.copy())
+        return mount_pose(self.body.snapshot(), *offset, self.gimbal)
+
+    def _wanted(self) -> list[int]:
+        with self._cond:
+            requested = {t for t, n in self._requests.items() if n > 0}
+        return sorted(t for t in self.captures if self.hub.is_subscribed(self.topic(t)) or t in requested)
+
+    def step(self, now_ns: int) -> bool:
+        """Capture if due and wanted; True if it rendered."""
+        with self._cond:
+            urgent = self._request_time_ns > self._latest_ns
+        if self.module is None or not (self.schedule.due(now_ns) or urgent):
+            return False
+        wanted = self._wanted()
+        if not wanted:
+            return False
+        self.capture(now_ns, wanted)
+        return True
+
+    def capture(self, now_ns: int, image_types: list[int]) -> None:
+        position, orientation = self.world_pose()
+        groups: dict[tuple[int, int, float], list[int]] = {}
+        for image_type in image_types:
+            capture = self.captures[image_type]
+            groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
+        latest: dict[int, dict[str, Any]] = {}
+        for (width, height, fov), types in groups.items():
+            rendered = self.module.render(self.world, position, orientation, width, height, fov, types)
+            for image_type, img in rendered.items():
+                message = messages.image(
+                    now_ns, img.encoding, img.width, img.height, img.data, position, orientation
+                )
+                latest[image_type] = message
+                path = self.topic(image_type)
+                if self.hub.is_subscribed(path):
+                    self.hub.publish(path, message)
+        with self._cond:
+            self._latest.update(latest)
+            self._latest_ns = now_ns
+            self._cond.notify_all()
+
+    def get_images(self, image_types: list[int], now_ns: Callable[[], int]) -> dict[str, Any]:
+        """GetImages: wait for a capture at or after the request's sim time; JSON form (data as a list)."""
+        types = [int(t) for t in image_types if int(t) in self.captures]
+        if not types:
+            return {}
+        t_request = now_ns()
+        deadline = time.monotonic() + GET_IMAGES_TIMEOUT_S
+        with self._cond:
+            for t in types:
+                self._requests[t] = self._requests.get(t, 0) + 1
+            self._request_time_ns = max(self._request_time_ns, t_request)
+            try:
+                while not (self._latest_ns >= t_request and all(t in self._latest for t in types)):
+                    remaining = deadline - time.monotonic()
+                    if remaining <= 0:
+                        raise ServiceError("GetImages() Timeout waiting for new captured_images.")
+                    self._cond.wait(remaining)
+                    if self._latest_ns >= t_request and not all(t in self._latest for t in types):
+                        self._request_time_ns = max(self._request_time_ns, self._latest_ns + 1)
+                result = {str(t): dict(self._latest[t]) for t in types}
+            finally:
+                for t in types:
+                    self._requests[t] -= 1
+        for entry in result.values():
+            entry["data"] = protocol.uint8_list(entry["data"])
+        return result
+
+
+class LidarStream:
+    """A lidar: one report per period (report-frequency, else one per horizontal rotation)."""
+
+    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: Any, hub: TopicHub) -> None:
+        self.path = f"{prefix}/lidar"
+        self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
+        module = sensor_module("lidar")
+        self.model = module.LidarModel.from_config(dict(sensor.config)) if module is not None else None
+        rate = (
+            sensor.config.get("report-frequency")
+            or sensor.config.get("horizontal-rotation-frequency")
+            or 10.0
+        )
+        self.schedule = Schedule(int(1e9 / float(rate)))
+        self.last_ns: int | None = None
+
+    def step(self, now_ns: int) -> bool:
+        if self.model is None or not self.schedule.due(now_ns):
+            return False
+        if not self.hub.is_subscribed(self.path):
+            self.last_ns = None
+            return False
+        start = self.last_ns if self.last_ns is not None else now_ns - self.schedule.period_ns
+        self.last_ns = now_ns
+        position, orientation = mount_pose(
+            self.body.snapshot(), self.sensor.position, self.sensor.orientation
+        )
+        scan = self.model.scan(self.world, position, orientation, start, now_ns)
+        message = {"time_stamp": int(now_ns)}
+        for key in (
+            "point_cloud",
+            "azimuth_elevation_range_cloud",
+            "segmentation_cloud",
+            "intensity_cloud",
+            "laser_index_cloud",
+        ):
+            message[key] = scan.get(key, np.zeros(0, dtype=np.float32))
+        message["pose"] = messages.pose(position, orientation)
+        self.hub.publish(self.path, message)
+        return True
+
+
+class RadarStream:
+    """A radar: detections every detection-interval, tracks every track-interval (while subscribed)."""
+
+    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: Any, hub: TopicHub) -> None:
+        self.detections_path = f"{prefix}/radar_detections"
+        self.tracks_path = f"{prefix}/radar_tracks"
+        self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
+        module = sensor_module("radar")
+        self.model = module.RadarModel.from_config(dict(sensor.config)) if module is not None else None
+        self.detect_schedule = Schedule(int(float(sensor.config.get("detection-interval", 0.1)) * 1e9))
+        self.track_schedule = Schedule(int(float(sensor.config.get("track-interval", 0.2)) * 1e9))
+
+    def step(self, now_ns: int) -> bool:
+        if self.model is None:
+            return False
+        worked = False
+        kin = self.body.snapshot()
+        position, orientation = mount_pose(kin, self.sensor.position, self.sensor.orientation)
+        if self.detect_schedule.due(now_ns) and self.hub.is_subscribed(self.detections_path):
+            found = self.model.detect(self.world, position, orientation, kin.linear_velocity, now_ns)
+            self.hub.publish(
+                self.detections_path,
+                {
+                    "time_stamp": int(now_ns),
+                    "radar_detections": found,
+                    "pose": messages.pose(position, orientation),
+                },
+            )
+            worked = True
+        if self.track_schedule.due(now_ns) and self.hub.is_subscribed(self.tracks_path):
+            tracks = self.model.track(self.world, position, orientation, kin.linear_velocity, now_ns)
+            self.hub.publish(
+                self.tracks_path,
+                {
+                    "time_stamp": int(now_ns),
+                    "radar_tracks": tracks,
+                    "pose": messages.pose(position, orientation),
+                },
+            )
+            worked = True
+        return worked
+
+
+class InstrumentStream:
+    """IMU, GPS, barometer, magnetometer, distance sensor, battery or airspeed of one robot."""
+
+    LEAVES: ClassVar[dict[str, str]] = {
+        "imu": "imu_kinematics",
+        "gps": "gps",
+        "barometer": "barometer",
+        "magnetometer": "magnetometer",
+        "distance-sensor": "distance_sensor",
+        "battery": "battery",
+        "airspeed": "airspeed",
+    }
+
+    def __init__(
+        self,
+        sensor: SensorSpec,
+        prefix: str,
+        body: Body,
+        world: Any,
+        hub: TopicHub,
+        home_geo: tuple[float, float, float],
+        start_ns: int,
+    ) -> None:
+        self.path = f"{prefix}/{self.LEAVES[sensor.type]}"
+        self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
+        self.start_ns = start_ns
+        self.module = sensor_module("instruments")
+        rate = float(sensor.config.get("update-frequency", 100.0) or 100.0)
+        self.schedule = Schedule(int(1e9 / rate))
+        self.idle = Schedule(IDLE_REFRESH_NS)
+
+    def message(self, now_ns: int) -> dict[str, Any] | None:
+        if self.module is None:
+            return None
+        kin = self.module.Kinematics(**vars(self.body.snapshot()))
+        cfg = dict(self.sensor.config)
+        kind = self.sensor.type
+        if kind == "imu":
+            return self.module.imu_message(kin, cfg, now_ns)
+        if kind == "gps":
+            return self.module.gps_message(kin, self.home_geo, cfg, now_ns)
+        if kind == "barometer":
+            return self.module.barometer_message(kin, self.home_geo, cfg, now_ns)
+        if kind == "magnetometer":
+            return self.module.magnetometer_message(kin, cfg, now_ns)
+        if kind == "distance-sensor":
+            return self.module.distance_message(self.world, kin, cfg, now_ns)
+        if kind == "battery":
+            return self.module.battery_message(now_ns, cfg, max(0.0, (now_ns - self.start_ns) / 1e9))
+        return self.module.airspeed_message(kin, cfg, now_ns)
+
+    def step(self, now_ns: int) -> None:
+        subscribed = self.hub.is_subscribed(self.path)
+        if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
+            message = self.message(now_ns)
+            if message is not None:
+                self.hub.publish(self.path, message)
+
+
+class RotorStream:
+    """rotor_info of a multirotor: spinning at a hover speed while armed or flying."""
+
+    def __init__(self, path: str, config: dict, body: Body, hub: TopicHub) -> None:
+        self.path, self.body, self.hub = path, body, hub
+        self.rotors = [
+            (str(a.get("name", f"rotor{i}")), dict(a.get("rotor-settings", {})))
+            for i, a in enumerate(config.get("actuators", []) or [])
+            if isinstance(a, dict) and a.get("type") == "rotor"
+        ]
+        self.schedule = Schedule(50_000_000)
+        self.idle = Schedule(IDLE_REFRESH_NS)
+        self.angle = 0.0
+
+    def message(self, now_ns: int, dt: float = 0.0) -> dict[str, Any]:
+        spinning = self.body.armed or not self.body.landed()
+        vec = []
+        for rotor_id, settings in self.rotors:
+            max_rpm = float(settings.get("max-rpm", 6000.0))
+            speed = 0.6 * max_rpm * 2 * math.pi / 60 if spinning else 0.0
+            direction = -1.0 if settings.get("turning-direction") == "counter-clock-wise" else 1.0
+            thrust = float(settings.get("coeff-of-thrust", 0.1)) * (0.6 if spinning else 0.0) * 4.0
+            torque = float(settings.get("coeff-of-torque", 0.04)) * (0.6 if spinning else 0.0) * direction
+            vec.append(
+                {
+                    "rotor_id": rotor_id,
+                    "speed": speed,
+                    "angle": math.fmod(self.angle * direction, 2 * math.pi),
+                    "torque": torque,
+                    "thrust": thrust,
+                }
+            )
+        return {"time_stamp": int(now_ns), "rotor_info_vec": vec}
+
+    def step(self, now_ns: int) -> None:
+        subscribed = self.hub.is_subscribed(self.path)
+        if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
+            self.angle += 0.3
+            self.hub.publish(self.path, self.message(now_ns))

@@ -1,0 +1,227 @@
+"""The topics channel: a Pair0 socket, the topic table, the subscription set and a last-value cache.
+
+Every publish caches the serialised body; a MESSAGE frame is sent only while the topic is subscribed.
+A SUBSCRIBE frame marks the topic and immediately sends its cached value (this is how `/$topics` and
+camera info reach the client, protocol.md §2.4-§2.5). When the client's pipe goes away, every
+subscription is cleared.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import pynng
+
+from airsim_mapper.simserver import protocol
+
+LOG = logging.getLogger("airsim_mapper.simserver.topics")
+
+TOPICS_PATH = "/$topics"
+PUBLISHED = "published"
+SUBSCRIBED = "subscribed"
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    """One row of the topic table, as listed in `/$topics`."""
+
+    path: str
+    type: str = PUBLISHED
+    message_type: str = ""
+    frequency: int = 0
+
+    def as_message(self) -> dict[str, Any]:
+        return {
+            "path": self.path,
+            "type": self.type,
+            "message_type": self.message_type,
+            "frequency": self.frequency,
+        }
+
+
+MessageHandler = Callable[[str, Any], None]
+SubscriptionListener = Callable[[str, bool], None]
+
+
+def topic_list_message(infos: Iterable[TopicInfo]) -> list[dict[str, Any]]:
+    """The `/$topics` body: every topic (including itself) in lexicographic path order."""
+    rows = {info.path: info for info in infos}
+    rows.setdefault(TOPICS_PATH, TopicInfo(TOPICS_PATH, PUBLISHED, "topic-list", 0))
+    return [rows[path].as_message() for path in sorted(rows)]
+
+
+class TopicHub:
+    """Owns the Pair0 socket and everything about topics; safe to call from any thread."""
+
+    def __init__(self, address: str, port: int, send_timeout_ms: int = 250) -> None:
+        self.url = f"tcp://{address}:{port}"
+        self._socket = pynng.Pair0(listen=self.url, recv_timeout=100, send_timeout=send_timeout_ms)
+        self._socket.add_post_pipe_connect_cb(self._on_pipe_connected)
+        self._socket.add_post_pipe_remove_cb(self._on_pipe_removed)
+        self._pipes: set[int] = set()
+        self._lock = threading.RLock()
+        self._send_lock = threading.Lock()
+        self._table: dict[str, TopicInfo] = {}
+        self._subscribed: set[str] = set()
+        self._cache: dict[str, bytes] = {}
+        self._handlers: dict[str, MessageHandler] = {}
+        self._listeners: list[SubscriptionListener] = []
+        self._stopping = threading.Event()
+        self._thread = threading.Thread(target=self._recv_loop, name="topics-recv", daemon=True)
+
+    # -- lifecycle
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stopping.set()
+        self._thread.join(timeout=2.0)
+        self._socket.close()
+
+    # -- table
+
+    def set_table(self, infos: Iterable[TopicInfo], handlers: dict[str, MessageHandler]) -> None:
+        """Replace the topic table (scene load): cache and subscriptions start empty, `/$topics` is cached."""
+        infos = list(infos)
+        body = protocol.pack(topic_list_message(infos))
+        with self._lock:
+            self._table = {info.path: info for info in infos}
+            self._table.setdefault(TOPICS_PATH, TopicInfo(TOPICS_PATH, PUBLISHED, "topic-list", 0))
+            self._subscribed.clear()
+            self._cache = {TOPICS_PATH: body}
+            self._handlers = dict(handlers)
+
+    def table(self) -> dict[str, TopicInfo]:
+        with self._lock:
+            return dict(self._table)
+
+    def add_listener(self, listener: SubscriptionListener) -> None:
+        """Call `listener(path, is_subscribed)` on every (un)subscription."""
+        self._listeners.append(listener)
+
+    def is_subscribed(self, path: str) -> bool:
+        return path in self._subscribed
+
+    def subscriptions(self) -> set[str]:
+        with self._lock:
+            return set(self._subscribed)
+
+    def cached(self, path: str) -> bytes | None:
+        with self._lock:
+            return self._cache.get(path)
+
+    # -- publishing
+
+    def publish(self, path: str, message: Any) -> bool:
+        """Cache `message` (packed) as the last value of `path`; send it if subscribed. False if unknown."""
+        body = message if isinstance(message, bytes) else protocol.pack(message)
+        with self._lock:
+            if path not in self._table:
+                return False
+            self._cache[path] = body
+            subscribed = path in self._subscribed
+        if subscribed:
+            self._send(path, body)
+        return True
+
+    def unsubscribe(self, paths: Iterable[str]) -> bool:
+        """The `/Sim/Unsubscribe` service: false if any path is not a registered topic."""
+        all_known = True
+        changed = []
+        with self._lock:
+            for path in paths:
+                if path not in self._table:
+                    all_known = False
+                if path in self._subscribed:
+                    self._subscribed.discard(path)
+                    changed.append(path)
+        for path in changed:
+            self._notify(path, False)
+        return all_known
+
+    def _send(self, path: str, body: bytes) -> None:
+        frame = protocol.encode_frame(path, body)
+        try:
+            with self._send_lock:
+                self._socket.send(frame)
+        except pynng.Timeout:
+            LOG.warning("dropped a message on %s: the client is not reading", path)
+        except pynng.NNGException as exc:
+            LOG.debug("send on %s failed: %s", path, exc)
+
+    # -- receiving
+
+    def _recv_loop(self) -> None:
+        while not self._stopping.is_set():
+            try:
+                raw = self._socket.recv()
+            except pynng.Timeout:
+                continue
+            except pynng.Closed:
+                return
+            except pynng.NNGException as exc:
+                LOG.debug("topics recv failed: %s", exc)
+                continue
+            try:
+                self._on_frame(protocol.decode_frame(raw))
+            except protocol.BadFrameError as exc:
+                LOG.warning("ignored a bad topics frame: %s", exc)
+            except Exception:
+                LOG.exception("failed to handle a topics frame")
+
+    def _on_frame(self, frame: protocol.Frame) -> None:
+        if frame.type == protocol.FrameType.SUBSCRIBE:
+            self._subscribe(frame.topic)
+        elif frame.type == protocol.FrameType.UNSUBSCRIBE:
+            self.unsubscribe([frame.topic])
+        elif frame.type == protocol.FrameType.MESSAGE:
+            self._on_message(frame.topic, frame.body)
+        else:
+            LOG.warning("ignored a frame of unknown type %s on %s", frame.type, frame.topic)
+
+    def _subscribe(self, path: str) -> None:
+        with self._lock:
+            if path not in self._table:
+                LOG.error("subscribe to unknown topic %s", path)
+                return
+            self._subscribed.add(path)
+            cached = self._cache.get(path)
+        if cached is not None:
+            self._send(path, cached)
+        self._notify(path, True)
+
+    def _on_message(self, path: str, body: bytes) -> None:
+        with self._lock:
+            info = self._table.get(path)
+            handler = self._handlers.get(path)
+        if info is None or info.type != SUBSCRIBED or handler is None:
+            LOG.warning("ignored a message on %s: not a server-subscribed topic", path)
+            return
+        handler(path, protocol.decode_body(body))
+
+    def _notify(self, path: str, subscribed: bool) -> None:
+        for listener in self._listeners:
+            try:
+                listener(path, subscribed)
+            except Exception:
+                LOG.exception("subscription listener failed")
+
+    def _on_pipe_connected(self, pipe: pynng.Pipe) -> None:
+        with self._lock:
+            self._pipes.add(pipe.id)
+
+    def _on_pipe_removed(self, pipe: pynng.Pipe) -> None:
+        with self._lock:
+            if pipe.id not in self._pipes:
+                return  # a refused second peer: the real client is still connected
+            self._pipes.discard(pipe.id)
+            gone = list(self._subscribed)
+            self._subscribed.clear()
+        for path in gone:
+            self._notify(path, False)
+        LOG.info("topics client disconnected; cleared %d subscriptions", len(gone))

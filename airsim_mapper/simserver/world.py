@@ -1,0 +1,533 @@
+"""The world the headless server senses: a ground plane at NED z = 0 plus boxes and spheres.
+
+Everything is pure numpy. `World.raycast` intersects many rays with every object at once (slab test for
+yawed boxes, quadratic for spheres, broadcast over rays x objects in chunks, float32) and with the ground.
+Surfaces are one-sided: a ray that starts inside an object does not see that object (back faces are
+culled), and the ground is seen only from above (z < 0).
+
+The world file format is documented in WORLD.md; `default_world.json` next to this module is the built-in
+default world.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+DEFAULT_WORLD_PATH = Path(__file__).with_name("default_world.json")
+SHAPES = ("box", "sphere")
+GROUND_INDEX = -1
+MISS_INDEX = -2
+MISS_SEGMENTATION_ID = 0
+_EPS = 1e-4  # hits closer than this are ignored (self hits at the ray origin)
+_CHUNK = 16384  # rays per broadcast block: bounds the (rays x objects) temporaries
+_UP = np.array([0.0, 0.0, -1.0], dtype=np.float32)  # ground normal in NED
+# face codes of a hit: none, ground, then 6 per box; a sphere hit s is coded -1 - s
+_FACE_NONE, _FACE_GROUND, _FACE_BOX0 = 0, 1, 2
+
+
+class WorldError(ValueError):
+    """A world file is malformed; the message names the file and the offending key."""
+
+    def __init__(self, source: str, key: str, problem: str) -> None:
+        self.source, self.key, self.problem = source, key, problem
+        super().__init__(f"world file {source}: key {key!r}: {problem}")
+
+
+@dataclass(frozen=True, eq=False)
+class WorldObject:
+    """One solid: a box (size = full extents along its yawed x, y, z) or a sphere (size = diameter x 3)."""
+
+    name: str
+    shape: str
+    center: np.ndarray
+    size: np.ndarray
+    yaw: float
+    segmentation_id: int
+    color_bgr: tuple[int, int, int]
+    collidable: bool = True
+
+    @property
+    def radius(self) -> float:
+        """Bounding radius: the sphere's radius, or half the box diagonal."""
+        if self.shape == "sphere":
+            return float(self.size[0]) / 2.0
+        return float(np.linalg.norm(self.size)) / 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class Hits:
+    """Per-ray results of `World.raycast` (N rays)."""
+
+    distance: np.ndarray  # (N,) float32, metres along the unit ray, +inf on a miss
+    object_index: np.ndarray  # (N,) int32, index into World.objects, -1 ground, -2 miss
+    normal: np.ndarray  # (N, 3) float32, unit surface normal in world NED (zeros on a miss)
+    segmentation_id: np.ndarray  # (N,) int32, the ground has its own id, a miss is 0
+
+    @property
+    def hit(self) -> np.ndarray:
+        return self.object_index != MISS_INDEX
+
+
+@dataclass(frozen=True, eq=False)
+class Contact:
+    """The deepest overlap of a sphere (a robot's collision body) with a world object."""
+
+    object_name: str
+    segmentation_id: int
+    position: np.ndarray  # centre of the colliding sphere (world NED)
+    impact_point: np.ndarray  # closest point on the object's surface (world NED)
+    normal: np.ndarray  # unit vector from the object towards the sphere centre
+    penetration_depth: float
+
+
+def _yaw_rotate(cos: np.ndarray, sin: np.ndarray, x, y):
+    """Rotate (x, y) by +yaw (object local -> world)."""
+    return cos * x - sin * y, sin * x + cos * y
+
+
+class World:
+    """Ground plane at z = 0 plus objects; answers ray casts and sphere collisions."""
+
+    def __init__(
+        self,
+        objects: Sequence[WorldObject],
+        ground_segmentation_id: int = 1,
+        ground_color_bgr: tuple[int, int, int] = (70, 130, 90),
+        sky_color_bgr: tuple[int, int, int] = (235, 206, 135),
+        source: str = "<built-in>",
+    ) -> None:
+        self.objects: tuple[WorldObject, ...] = tuple(objects)
+        self.ground_segmentation_id = int(ground_segmentation_id)
+        self.ground_color_bgr = tuple(int(c) for c in ground_color_bgr)
+        self.sky_color_bgr = tuple(int(c) for c in sky_color_bgr)
+        self.source = source
+        boxes = [i for i, o in enumerate(self.objects) if o.shape == "box"]
+        spheres = [i for i, o in enumerate(self.objects) if o.shape == "sphere"]
+        f32 = np.float32
+        self._box_index = np.array(boxes, dtype=np.int32)
+        self._box_center = np.array([self.objects[i].center for i in boxes], dtype=f32).reshape(-1, 3)
+        self._box_half = np.array([self.objects[i].size / 2.0 for i in boxes], dtype=f32).reshape(-1, 3)
+        yaws = np.array([self.objects[i].yaw for i in boxes], dtype=np.float64)
+        self._box_cos = np.cos(yaws).astype(f32)
+        self._box_sin = np.sin(yaws).astype(f32)
+        self._sphere_index = np.array(spheres, dtype=np.int32)
+        self._sphere_center = np.array([self.objects[i].center for i in spheres], dtype=f32).reshape(-1, 3)
+        self._sphere_radius = np.array([self.objects[i].size[0] / 2.0 for i in spheres], dtype=f32)
+        # columns of the candidate table: boxes first, then spheres
+        self._column_object = np.concatenate([self._box_index, self._sphere_index]).astype(np.int32)
+        column_objects = [self.objects[i] for i in self._column_object]
+        self._bound_center = np.array([o.center for o in column_objects], dtype=f32).reshape(-1, 3)
+        self._bound_r2 = np.array([o.radius**2 for o in column_objects], dtype=f32) * f32(1.0001)
+        self._bound_c2 = (self._bound_center**2).sum(axis=1)
+        self._box_cols = np.ascontiguousarray(self._box_center.T)  # (3, B)
+        self._box_half_cols = np.ascontiguousarray(self._box_half.T)
+        self._sphere_cols = np.ascontiguousarray(self._sphere_center.T)  # (3, S)
+        self._face_normals = self._face_normal_table()
+        seg = [o.segmentation_id for o in self.objects]
+        # lookup by object_index + 2: miss, ground, objects...
+        self._segmentation_lookup = np.array(
+            [MISS_SEGMENTATION_ID, self.ground_segmentation_id, *seg], dtype=np.int32
+        )
+        colors = [self.sky_color_bgr, self.ground_color_bgr, *(o.color_bgr for o in self.objects)]
+        self._color_lookup = np.array(colors, dtype=np.float32).reshape(-1, 3)
+        self._by_name = {o.name: o for o in self.objects}
+
+    def _face_normal_table(self) -> np.ndarray:
+        """(3, 2 + 6B) world normals by face code: none, ground, then box b's -x, +x, -y, +y, -z, +z faces."""
+        table = np.zeros((3, _FACE_BOX0 + 6 * self._box_index.size), dtype=np.float32)
+        table[:, _FACE_GROUND] = _UP
+        for b in range(self._box_index.size):
+            cos, sin = float(self._box_cos[b]), float(self._box_sin[b])
+            axes = np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])  # local axes in world
+            for axis in range(3):
+                table[:, _FACE_BOX0 + 6 * b + 2 * axis] = -axes[axis]
+                table[:, _FACE_BOX0 + 6 * b + 2 * axis + 1] = axes[axis]
+        return table
+
+    def object_named(self, name: str) -> WorldObject | None:
+        return self._by_name.get(name)
+
+    def colors_of(self, object_index: np.ndarray) -> np.ndarray:
+        """(3, N) base B, G, R rows (float32, 0-255) of each hit: sky for a miss, ground, or the object."""
+        slots = np.asarray(object_index) + 2
+        return np.stack([np.take(self._color_lookup[:, c], slots) for c in range(3)])
+
+    # ---------------------------------------------------------------- ray casting
+    def raycast(self, origins: np.ndarray, directions: np.ndarray, max_range: float) -> Hits:
+        """Intersect rays with the ground and every object; hits beyond `max_range` count as misses.
+
+        `origins` is (N, 3) or one shared (3,) origin; `directions` (N, 3) need not be unit length (the
+        returned distance is along the normalised direction).
+        """
+        dirs = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
+        return self.raycast_columns(origins, np.ascontiguousarray(dirs.T), max_range)
+
+    def raycast_columns(
+        self, origins: np.ndarray, directions: np.ndarray, max_range: float, unit: bool = False
+    ) -> Hits:
+        """`raycast` with directions given column-wise, (3, N): the fast layout for large N.
+
+        `unit=True` promises unit-length directions and skips normalising them.
+        """
+        d = np.asarray(directions, dtype=np.float32)
+        count = d.shape[1]
+        if not unit:
+            norms = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+            d = d / np.where(norms == 0.0, np.float32(1.0), norms)
+        o = np.asarray(origins, dtype=np.float32)
+        shared = o.ndim == 1
+        o = o.reshape(3, 1) if shared else np.ascontiguousarray(o.reshape(-1, 3).T)
+        if not shared and o.shape[1] != count:
+            raise ValueError(f"raycast: {o.shape[1]} origins for {count} directions")
+        distance = np.empty(count, dtype=np.float32)
+        index = np.empty(count, dtype=np.int32)
+        face = np.empty(count, dtype=np.int32)
+        local_origin = self._box_local_origins(o) if shared else None
+        for start in range(0, count, _CHUNK):
+            stop = min(start + _CHUNK, count)
+            block_o = o if shared else o[:, start:stop]
+            distance[start:stop], index[start:stop], face[start:stop] = self._cast_block(
+                block_o, d[:, start:stop], local_origin
+            )
+        miss = ~(distance <= np.float32(max_range))
+        distance[miss] = np.inf
+        index[miss] = MISS_INDEX
+        face[miss] = _FACE_NONE
+        normal = self._normals(o, d, distance, face)
+        segmentation = np.take(self._segmentation_lookup, index + 2)
+        return Hits(distance=distance, object_index=index, normal=normal.T, segmentation_id=segmentation)
+
+    def _box_local_origins(self, o: np.ndarray) -> np.ndarray:
+        """(3, B) one shared ray origin expressed in every box's frame."""
+        rel = o - self._box_cols
+        cos, sin = self._box_cos, self._box_sin
+        return np.stack([cos * rel[0] + sin * rel[1], -sin * rel[0] + cos * rel[1], rel[2]])
+
+    def _cast_block(self, o: np.ndarray, d: np.ndarray, local_origin: np.ndarray | None):
+        """Nearest hit distance, object index and face code of one block of rays (o (3, 1|n), d (3, n)).
+
+        A cheap bounding-sphere test over (objects x rays), two small matrix products, selects candidate
+        pairs; only those pairs run the exact slab (box) or quadratic (sphere) test, vectorised over the
+        pair list.
+        """
+        n = d.shape[1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ground = np.where((d[2] > 1e-6) & (o[2] < 0.0), -o[2] / d[2], np.float32(np.inf))
+        best = ground.astype(np.float32, copy=False)
+        on_ground = best < np.inf
+        best_index = np.where(on_ground, GROUND_INDEX, MISS_INDEX).astype(np.int32)
+        best_face = np.where(on_ground, _FACE_GROUND, _FACE_NONE).astype(np.int32)
+        if not self.objects:
+            return best, best_index, best_face
+        c = self._bound_center  # (K, 3)
+        proj = c @ d - (o * d).sum(axis=0)  # (centre - origin) . d, (K, n)
+        dist2 = self._bound_c2[:, None] - 2.0 * (c @ o) + (o * o).sum(axis=0)  # |centre - origin|^2
+        r2 = self._bound_r2[:, None]
+        candidate = (dist2 - proj * proj <= r2) & ((proj > 0.0) | (dist2 <= r2))
+        cols, rays = np.nonzero(candidate)
+        if rays.size == 0:
+            return best, best_index, best_face
+        pair_t = np.empty(rays.size, dtype=np.float32)
+        pair_face = np.empty(rays.size, dtype=np.int32)
+        n_box = self._box_index.size
+        is_box = cols < n_box
+        for select, is_sphere in ((is_box, False), (~is_box, True)):
+            if not select.any():
+                continue
+            r, k = rays[select], cols[select]
+            pair_o = o if o.shape[1] == 1 else np.take(o, r, axis=1)
+            pair_d = np.take(d, r, axis=1)
+            if is_sphere:
+                pair_t[select], pair_face[select] = self._sphere_pairs(pair_o, pair_d, k - n_box)
+            else:
+                pair_t[select], pair_face[select] = self._box_pairs(pair_o, pair_d, k, local_origin)
+        table = np.full((len(self.objects), n), np.inf, dtype=np.float32)
+        table[cols, rays] = pair_t
+        nearest = table.min(axis=0)
+        closer = nearest < best
+        # the winning pair of each ray is the one whose distance equals the ray's nearest distance
+        winner = (pair_t == np.take(nearest, rays)) & np.take(closer, rays)
+        won = rays[winner]
+        best_index[won] = np.take(self._column_object, cols[winner])
+        best_face[won] = pair_face[winner]
+        return np.where(closer, nearest, best), best_index, best_face
+
+    def _box_pairs(self, o: np.ndarray, d: np.ndarray, k: np.ndarray, local_origin: np.ndarray | None):
+        """Entry distance (+inf on a miss) and face code of ray i into box k[i] (slab test, box frame)."""
+        cos, sin = np.take(self._box_cos, k), np.take(self._box_sin, k)
+        if local_origin is not None:
+            local_o = [np.take(local_origin[a], k) for a in range(3)]
+        else:
+            rel = [o[a] - np.take(self._box_cols[a], k) for a in range(3)]
+            local_o = [cos * rel[0] + sin * rel[1], -sin * rel[0] + cos * rel[1], rel[2]]
+        local_d = (cos * d[0] + sin * d[1], -sin * d[0] + cos * d[1], d[2])
+        near = np.full(k.shape, -np.inf, dtype=np.float32)
+        far = np.full(k.shape, np.inf, dtype=np.float32)
+        face = np.zeros(k.shape, dtype=np.int32)
+        for axis in range(3):
+            da = local_d[axis]
+            h = np.take(self._box_half_cols[axis], k)
+            inv = np.float32(1.0) / np.where(np.abs(da) < 1e-12, np.float32(1e-12), da)
+            t1 = (-h - local_o[axis]) * inv
+            t2 = (h - local_o[axis]) * inv
+            entry = np.minimum(t1, t2)
+            later = entry > near
+            near = np.where(later, entry, near)
+            # entering through the + face when travelling towards -axis
+            face = np.where(later, 2 * axis + (da < 0.0), face)
+            np.minimum(far, np.maximum(t1, t2), out=far)
+        t = np.where((near <= far) & (near > _EPS), near, np.float32(np.inf))
+        return t, _FACE_BOX0 + 6 * k + face
+
+    def _sphere_pairs(self, o: np.ndarray, d: np.ndarray, s: np.ndarray):
+        """Entry distance (+inf on a miss) and face code of ray i into sphere s[i]."""
+        rel = [o[a] - np.take(self._sphere_cols[a], s) for a in range(3)]
+        b = d[0] * rel[0] + d[1] * rel[1] + d[2] * rel[2]
+        c = rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2] - np.take(self._sphere_radius, s) ** 2
+        disc = b * b - c
+        with np.errstate(invalid="ignore"):
+            t = -b - np.sqrt(disc)
+        t = np.where((disc >= 0.0) & (t > _EPS), t, np.float32(np.inf)).astype(np.float32)
+        return t, -1 - s
+
+    def _normals(self, o: np.ndarray, d: np.ndarray, distance: np.ndarray, face: np.ndarray) -> np.ndarray:
+        """(3, N) unit world normals at the hit points (zeros where nothing is hit)."""
+        slots = np.maximum(face, 0)
+        normal = np.stack([np.take(self._face_normals[a], slots) for a in range(3)])
+        rays = np.nonzero(face < 0)[0]
+        if rays.size:
+            s = -1 - face[rays]
+            pair_o = o if o.shape[1] == 1 else np.take(o, rays, axis=1)
+            dist = np.take(distance, rays)
+            radius = np.take(self._sphere_radius, s)
+            for a in range(3):
+                point = pair_o[a] + np.take(d[a], rays) * dist
+                normal[a, rays] = (point - np.take(self._sphere_cols[a], s)) / radius
+        return normal
+
+    # ---------------------------------------------------------------- collisions
+    def collide_sphere(self, center: np.ndarray, radius: float) -> Contact | None:
+        """Deepest overlap of a sphere with a collidable object (the ground is not considered)."""
+        c = np.asarray(center, dtype=np.float64).reshape(3)
+        best: tuple[float, int, np.ndarray, np.ndarray] | None = None
+        candidates = []
+        if self._box_index.size:
+            candidates.append(self._box_contacts(c, radius))
+        if self._sphere_index.size:
+            candidates.append(self._sphere_contacts(c, radius))
+        for depth, objs, points, normals in candidates:
+            collidable = np.array([self.objects[i].collidable for i in objs], dtype=bool)
+            depth = np.where(collidable, depth, -np.inf)
+            k = int(np.argmax(depth))
+            if depth[k] > 0.0 and (best is None or depth[k] > best[0]):
+                best = (float(depth[k]), int(objs[k]), points[k], normals[k])
+        if best is None:
+            return None
+        depth, i, point, normal = best
+        obj = self.objects[i]
+        return Contact(obj.name, obj.segmentation_id, c.copy(), point, normal, depth)
+
+    def _box_contacts(self, c: np.ndarray, radius: float):
+        cos = self._box_cos.astype(np.float64)
+        sin = self._box_sin.astype(np.float64)
+        half = self._box_half.astype(np.float64)
+        rel = c - self._box_center.astype(np.float64)
+        local = np.stack(
+            [cos * rel[:, 0] + sin * rel[:, 1], -sin * rel[:, 0] + cos * rel[:, 1], rel[:, 2]], 1
+        )
+        closest = np.clip(local, -half, half)
+        gap = local - closest
+        dist = np.linalg.norm(gap, axis=1)
+        outside = dist > 1e-9
+        # inside: push out through the nearest face
+        face_dist = half - np.abs(local)
+        axis = np.argmin(face_dist, axis=1)
+        rows = np.arange(axis.size)
+        sign = np.where(local[rows, axis] >= 0.0, 1.0, -1.0)
+        inside_n = np.zeros_like(local)
+        inside_n[rows, axis] = sign
+        inside_p = local.copy()
+        inside_p[rows, axis] = sign * half[rows, axis]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out_n = gap / np.where(outside, dist, 1.0)[:, None]
+        local_n = np.where(outside[:, None], out_n, inside_n)
+        local_p = np.where(outside[:, None], closest, inside_p)
+        depth = np.where(outside, radius - dist, radius + face_dist[rows, axis])
+        nx, ny = _yaw_rotate(cos, sin, local_n[:, 0], local_n[:, 1])
+        px, py = _yaw_rotate(cos, sin, local_p[:, 0], local_p[:, 1])
+        normals = np.stack([nx, ny, local_n[:, 2]], 1)
+        points = np.stack([px, py, local_p[:, 2]], 1) + self._box_center
+        return depth, self._box_index, points, normals
+
+    def _sphere_contacts(self, c: np.ndarray, radius: float):
+        centers = self._sphere_center.astype(np.float64)
+        radii = self._sphere_radius.astype(np.float64)
+        rel = c - centers
+        dist = np.linalg.norm(rel, axis=1)
+        normals = np.where(
+            (dist > 1e-9)[:, None],
+            rel / np.where(dist > 1e-9, dist, 1.0)[:, None],
+            np.array([0.0, 0.0, -1.0]),
+        )
+        points = centers + normals * radii[:, None]
+        return radius + radii - dist, self._sphere_index, points, normals
+
+
+# -------------------------------------------------------------------- loading
+def _number(value: Any, source: str, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise WorldError(source, key, f"must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _vector(value: Any, source: str, key: str, positive: bool = False) -> np.ndarray:
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise WorldError(source, key, f"must be a list of 3 numbers, got {value!r}")
+    vec = np.array([_number(v, source, f"{key}[{i}]") for i, v in enumerate(value)])
+    if positive and not (vec > 0).all():
+        raise WorldError(source, key, f"must hold 3 positive numbers, got {value!r}")
+    return vec
+
+
+def _color(value: Any, source: str, key: str) -> tuple[int, int, int]:
+    ok = isinstance(value, (list, tuple)) and len(value) == 3
+    if not ok or not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 255 for v in value):
+        raise WorldError(source, key, f"must be 3 integers 0-255 (blue, green, red), got {value!r}")
+    return (value[0], value[1], value[2])
+
+
+def _seg_id(value: Any, source: str, key: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 255:
+        raise WorldError(source, key, f"must be an integer 1-255, got {value!r}")
+    return value
+
+
+def _check_keys(entry: dict, allowed: set[str], source: str, where: str) -> None:
+    unknown = sorted(set(entry) - allowed)
+    if unknown:
+        raise WorldError(
+            source, f"{where}.{unknown[0]}", f"unknown key (allowed: {', '.join(sorted(allowed))})"
+        )
+
+
+_OBJECT_KEYS = {
+    "name",
+    "shape",
+    "center",
+    "size",
+    "radius",
+    "yaw-deg",
+    "segmentation-id",
+    "color-bgr",
+    "collidable",
+}
+
+
+def _parse_object(entry: Any, source: str, where: str) -> WorldObject:
+    if not isinstance(entry, dict):
+        raise WorldError(source, where, f"must be a mapping, got {entry!r}")
+    _check_keys(entry, _OBJECT_KEYS, source, where)
+    for required in ("name", "shape", "center", "segmentation-id", "color-bgr"):
+        if required not in entry:
+            raise WorldError(source, f"{where}.{required}", "is required")
+    name = entry["name"]
+    if not isinstance(name, str) or not name:
+        raise WorldError(source, f"{where}.name", f"must be a non-empty string, got {name!r}")
+    shape = entry["shape"]
+    if shape not in SHAPES:
+        raise WorldError(source, f"{where}.shape", f"must be one of {', '.join(SHAPES)}, got {shape!r}")
+    center = _vector(entry["center"], source, f"{where}.center")
+    if shape == "box":
+        if "size" not in entry:
+            raise WorldError(source, f"{where}.size", "is required for a box")
+        size = _vector(entry["size"], source, f"{where}.size", positive=True)
+    else:
+        if "radius" not in entry:
+            raise WorldError(source, f"{where}.radius", "is required for a sphere")
+        radius = _number(entry["radius"], source, f"{where}.radius")
+        if radius <= 0:
+            raise WorldError(source, f"{where}.radius", f"must be positive, got {radius!r}")
+        size = np.full(3, 2.0 * radius)
+    yaw = math.radians(_number(entry.get("yaw-deg", 0.0), source, f"{where}.yaw-deg"))
+    collidable = entry.get("collidable", True)
+    if not isinstance(collidable, bool):
+        raise WorldError(source, f"{where}.collidable", f"must be true or false, got {collidable!r}")
+    return WorldObject(
+        name=name,
+        shape=shape,
+        center=center,
+        size=size,
+        yaw=yaw,
+        segmentation_id=_seg_id(entry["segmentation-id"], source, f"{where}.segmentation-id"),
+        color_bgr=_color(entry["color-bgr"], source, f"{where}.color-bgr"),
+        collidable=collidable,
+    )
+
+
+def world_from_dict(data: Any, source: str = "<dict>") -> World:
+    """Build a World from the parsed contents of a world file (see WORLD.md)."""
+    if not isinstance(data, dict):
+        raise WorldError(source, "<top level>", f"must be a mapping, got {type(data).__name__}")
+    _check_keys(data, {"version", "ground", "sky", "objects"}, source, "<top level>")
+    version = data.get("version", 1)
+    if version != 1:
+        raise WorldError(source, "version", f"must be 1, got {version!r}")
+    ground = data.get("ground", {})
+    if not isinstance(ground, dict):
+        raise WorldError(source, "ground", f"must be a mapping, got {ground!r}")
+    _check_keys(ground, {"segmentation-id", "color-bgr"}, source, "ground")
+    sky = data.get("sky", {})
+    if not isinstance(sky, dict):
+        raise WorldError(source, "sky", f"must be a mapping, got {sky!r}")
+    _check_keys(sky, {"color-bgr"}, source, "sky")
+    entries = data.get("objects", [])
+    if not isinstance(entries, list):
+        raise WorldError(source, "objects", f"must be a list, got {entries!r}")
+    objects = [_parse_object(e, source, f"objects[{i}]") for i, e in enumerate(entries)]
+    ground_id = _seg_id(ground.get("segmentation-id", 1), source, "ground.segmentation-id")
+    seen: dict[str, int] = {}
+    for i, obj in enumerate(objects):
+        if obj.name in seen:
+            raise WorldError(
+                source, f"objects[{i}].name", f"duplicate name {obj.name!r} (see objects[{seen[obj.name]}])"
+            )
+        seen[obj.name] = i
+        if obj.segmentation_id == ground_id:
+            raise WorldError(
+                source,
+                f"objects[{i}].segmentation-id",
+                f"{obj.segmentation_id} is the ground's segmentation id",
+            )
+    return World(
+        objects,
+        ground_segmentation_id=ground_id,
+        ground_color_bgr=_color(ground.get("color-bgr", [70, 130, 90]), source, "ground.color-bgr"),
+        sky_color_bgr=_color(sky.get("color-bgr", [235, 206, 135]), source, "sky.color-bgr"),
+        source=source,
+    )
+
+
+def load_world(path: str | os.PathLike | None = None) -> World:
+    """Load a world file (.json, or .yaml/.yml); None loads the built-in default world."""
+    file = DEFAULT_WORLD_PATH if path is None else Path(path)
+    source = str(file)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise WorldError(source, "<file>", f"cannot be read ({exc.strerror or exc})") from exc
+    try:
+        data = yaml.safe_load(text) if file.suffix.lower() in (".yaml", ".yml") else json.loads(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as exc:
+        raise WorldError(
+            source, "<file>", f"is not valid {file.suffix.lstrip('.') or 'JSON'}: {exc}"
+        ) from exc
+    return world_from_dict(data, source)

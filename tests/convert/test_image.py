@@ -1,0 +1,186 @@
+"""Images: zero-copy BGR, PNG decoding, float16/uint16 depth to 32FC1 metres, GRAY8, size checks."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.image import image
+
+CTX = ConvertContext(frame_id="airsim_node/Drone1/FrontCamera/scene_camera")
+
+
+def sim_image(encoding, data, width, height, **extra):
+    msg = {
+        "time_stamp": 1_000_000_123,
+        "height": height,
+        "width": width,
+        "encoding": encoding,
+        "big_endian": False,
+        "step": 1,
+        "data": data,
+    }
+    msg.update(extra)
+    return msg
+
+
+def pixels(msg) -> np.ndarray:
+    dtype = {"bgr8": np.uint8, "mono8": np.uint8, "32FC1": np.float32}[msg.encoding]
+    return np.frombuffer(msg.data, dtype=dtype)
+
+
+def test_bgr_image_keeps_the_sim_bytes_object_without_copying(roundtrip):
+    data = bytes(range(256)) * 9  # 2304 bytes = 32x24x3
+    msg = image(sim_image("BGR", data, 32, 24), CTX)
+    assert msg.data is data
+    assert (msg.encoding, msg.width, msg.height, msg.step, msg.is_bigendian) == ("bgr8", 32, 24, 96, 0)
+    assert msg.header.frame_id == CTX.frame_id
+    assert msg.header.stamp.to_nsec() == 1_000_000_123
+    assert roundtrip(msg) == msg
+
+
+def test_full_hd_bgr_image_is_not_copied_and_converts_fast(timed):
+    data = bytes(1920 * 1080 * 3)
+    msg = image(sim_image("BGR", data, 1920, 1080), CTX)
+    assert msg.data is data
+    assert timed(3, lambda: image(sim_image("BGR", data, 1920, 1080), CTX)) < 0.002
+
+
+def test_bgr_from_a_list_of_ints_getimages_form_is_packed():
+    msg = image(sim_image("BGR", [1, 2, 3, 4, 5, 6], 2, 1), CTX)
+    assert msg.data == bytes([1, 2, 3, 4, 5, 6])
+
+
+def test_bgr_from_a_memoryview_is_accepted():
+    msg = image(sim_image("BGR", memoryview(bytes([9, 8, 7])), 1, 1), CTX)
+    assert msg.data == bytes([9, 8, 7])
+
+
+def test_png_is_decoded_to_bgr8(roundtrip):
+    bgr = np.arange(4 * 3 * 3, dtype=np.uint8).reshape(3, 4, 3)
+    ok, png = cv2.imencode(".png", bgr)
+    assert ok
+    msg = image(sim_image("PNG", png.tobytes(), 4, 3), CTX)
+    assert (msg.encoding, msg.step) == ("bgr8", 12)
+    assert msg.data == bgr.tobytes()
+    assert roundtrip(msg) == msg
+
+
+def test_float16_depth_becomes_float32_metres_with_inf_kept():
+    depth = np.array([[0.5, 1.25], [100.0, np.inf]], dtype="<f2")
+    msg = image(sim_image("16FC1", depth.tobytes(), 2, 2), CTX)
+    assert (msg.encoding, msg.step) == ("32FC1", 8)
+    assert pixels(msg).tolist() == [0.5, 1.25, 100.0, float("inf")]
+
+
+def test_big_endian_float16_depth_is_read_as_big_endian():
+    depth = np.array([2.0, 3.5], dtype=">f2")
+    msg = image(sim_image("16FC1", depth.tobytes(), 2, 1, big_endian=True), CTX)
+    assert pixels(msg).tolist() == [2.0, 3.5]
+    assert msg.is_bigendian == 0
+
+
+def test_full_hd_float16_depth_converts_in_a_few_milliseconds(timed):
+    data = np.full(1920 * 1080, 12.5, dtype="<f2").tobytes()
+    msg = image(sim_image("16FC1", data, 1920, 1080), CTX)
+    assert len(msg.data) == 1920 * 1080 * 4
+    assert timed(5, lambda: image(sim_image("16FC1", data, 1920, 1080), CTX)) < 0.1  # ~2-4 ms idle
+
+
+def test_uint16_millimetre_depth_becomes_float32_metres():
+    depth = np.array([0, 1500, 65535], dtype="<u2")
+    msg = image(sim_image("16UC1", depth.tobytes(), 3, 1), CTX)
+    assert pixels(msg).tolist() == pytest.approx([0.0, 1.5, 65.535])
+
+
+def test_uint16_depth_from_a_list_of_ints_is_read_as_bytes():
+    msg = image(sim_image("16UC1", [0xE8, 0x03], 1, 1), CTX)  # 1000 mm little-endian
+    assert pixels(msg).tolist() == [1.0]
+
+
+def test_gray8_becomes_mono8_without_copying():
+    data = bytes([1, 2, 3, 4, 5, 6])
+    msg = image(sim_image("GRAY8", data, 3, 2), CTX)
+    assert (msg.encoding, msg.step) == ("mono8", 3)
+    assert msg.data is data
+
+
+def test_git_server_32fc1_depth_is_read_from_data_float():
+    msg = image(sim_image("32FC1", b"", 2, 1, data_float=[1.5, 2.5]), CTX)
+    assert pixels(msg).tolist() == [1.5, 2.5]
+
+
+def test_truncated_bgr_data_is_rejected_with_sizes():
+    with pytest.raises(ConversionError, match=r"image: data has 100 bytes, expected 921600 for 640x480 BGR"):
+        image(sim_image("BGR", bytes(100), 640, 480), CTX)
+
+
+def test_truncated_depth_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: data has 7 bytes, expected 8 for 2x2 16FC1"):
+        image(sim_image("16FC1", bytes(7), 2, 2), CTX)
+
+
+def test_unknown_encoding_is_rejected_listing_the_known_ones():
+    with pytest.raises(ConversionError, match=r"image: unknown encoding 'YUV'; expected one of \['16FC1'"):
+        image(sim_image("YUV", b"", 0, 0), CTX)
+
+
+def test_corrupt_png_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: PNG data could not be decoded"):
+        image(sim_image("PNG", b"not a png", 4, 3), CTX)
+
+
+def test_empty_png_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: PNG data is empty"):
+        image(sim_image("PNG", b"", 4, 3), CTX)
+
+
+def test_png_of_another_size_is_rejected():
+    _ok, png = cv2.imencode(".png", np.zeros((3, 4, 3), dtype=np.uint8))
+    with pytest.raises(ConversionError, match=r"image: PNG decodes to 4x3, expected 5x3"):
+        image(sim_image("PNG", png.tobytes(), 5, 3), CTX)
+
+
+def test_missing_data_is_rejected():
+    msg = sim_image("BGR", b"", 0, 0)
+    del msg["data"]
+    with pytest.raises(ConversionError, match=r"image: image has no 'data'"):
+        image(msg, CTX)
+
+
+def test_negative_size_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: size 2x-1 must not be negative"):
+        image(sim_image("BGR", b"", 2, -1), CTX)
+
+
+def test_non_integer_width_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: width must be an integer, got 2.0"):
+        image(sim_image("BGR", b"", 2.0, 1), CTX)
+
+
+def test_data_list_with_values_out_of_byte_range_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: data list must hold ints in 0..255"):
+        image(sim_image("GRAY8", [256], 1, 1), CTX)
+
+
+def test_data_of_another_type_is_rejected():
+    with pytest.raises(ConversionError, match=r"image: data must be bytes or a list of ints, got str"):
+        image(sim_image("GRAY8", "x", 1, 1), CTX)
+
+
+def test_float16_conversion_matches_numpy_bit_for_bit_including_specials():
+    rng = np.random.default_rng(3)
+    depth = (rng.random(64 * 48) * 200).astype("<f2")
+    depth[:6] = [np.inf, -np.inf, np.nan, -0.0, np.float16(6e-8), np.float16(-3e-5)]
+    msg = image(sim_image("16FC1", depth.tobytes(), 64, 48), CTX)
+    assert np.frombuffer(msg.data, "<u4").tolist() == depth.astype("<f4").view("<u4").tolist()
+
+
+def test_big_endian_float16_full_frame_matches_little_endian():
+    depth = np.linspace(0.0, 50.0, 32 * 16).astype("<f2")
+    little = image(sim_image("16FC1", depth.tobytes(), 32, 16), CTX)
+    big = image(sim_image("16FC1", depth.astype(">f2").tobytes(), 32, 16, big_endian=True), CTX)
+    assert big.data == little.data

@@ -1,0 +1,140 @@
+"""Robot and camera poses: NED pass-through, ENU conversion, mounts and commanded overrides."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import rospy
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
+
+from airsim_mapper.convert.command import camera_desired_pose
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.pose import camera_pose, camera_pose_key, camera_pose_override, pose_stamped
+from airsim_mapper.geometry import quat_from_rpy, rpy_from_quat
+
+H = math.sqrt(0.5)
+
+
+def sim_pose(position=(1.0, 2.0, -3.0), q=(1.0, 0.0, 0.0, 0.0), stamp=2_500_000_000):
+    w, x, y, z = q
+    return {
+        "time_stamp": stamp,
+        "position": dict(zip("xyz", position)),
+        "orientation": {"w": w, "x": x, "y": y, "z": z},
+    }
+
+
+def xyz(msg: PoseStamped) -> list[float]:
+    p = msg.pose.position
+    return [p.x, p.y, p.z]
+
+
+def wxyz(msg: PoseStamped) -> list[float]:
+    o = msg.pose.orientation
+    return [o.w, o.x, o.y, o.z]
+
+
+def test_ned_pose_passes_through_with_header(ned, roundtrip):
+    msg = pose_stamped(sim_pose(q=(H, 0.0, 0.0, H)), ned)
+    assert xyz(msg) == [1.0, 2.0, -3.0]
+    assert wxyz(msg) == [H, 0.0, 0.0, H]
+    assert msg.header.frame_id == "map"
+    assert msg.header.stamp == rospy.Time(2, 500_000_000)
+    assert roundtrip(msg) == msg
+
+
+def test_enu_pose_swaps_axes_and_turns_north_facing_into_yaw_90(enu):
+    msg = pose_stamped(sim_pose(), enu)
+    assert xyz(msg) == [2.0, 1.0, 3.0]
+    assert rpy_from_quat(np.array(wxyz(msg)))[2] == pytest.approx(math.pi / 2)
+
+
+def test_ros_stamp_comes_from_now():
+    ctx = ConvertContext(stamp="ros", now=lambda: rospy.Time(7, 0))
+    assert pose_stamped(sim_pose(), ctx).header.stamp == rospy.Time(7, 0)
+
+
+def test_pose_without_orientation_is_rejected(ned):
+    msg = sim_pose()
+    del msg["orientation"]
+    with pytest.raises(ConversionError, match=r"pose: message has no 'orientation'"):
+        pose_stamped(msg, ned)
+
+
+def test_pose_with_nan_position_is_rejected(ned):
+    msg = sim_pose(position=(float("nan"), 0.0, 0.0))
+    with pytest.raises(ConversionError, match=r"pose: position.x must be finite, got nan"):
+        pose_stamped(msg, ned)
+
+
+def test_pose_with_zero_quaternion_is_rejected(ned):
+    with pytest.raises(ConversionError, match=r"pose: orientation is a zero quaternion"):
+        pose_stamped(sim_pose(q=(0.0, 0.0, 0.0, 0.0)), ned)
+
+
+def camera_ctx(convention="ned", origin=None, shared=None):
+    return ConvertContext(
+        frame_id="map",
+        convention=convention,
+        source={"camera_origin": origin or {"xyz": "1 0 0", "rpy-deg": "0 -90 0"}},
+        variables={"robot_name": "Drone1", "camera_name": "DownCamera"},
+        shared={} if shared is None else shared,
+    )
+
+
+def test_camera_pose_composes_the_robot_pose_with_the_mount():
+    robot_yawed_east = quat_from_rpy(0.0, 0.0, math.pi / 2)
+    msg = camera_pose(sim_pose(position=(10.0, 0.0, -5.0), q=tuple(robot_yawed_east)), camera_ctx())
+    # the mount is 1 m forward; the robot faces east, so the camera sits 1 m east of it
+    assert xyz(msg) == pytest.approx([10.0, 1.0, -5.0])
+    _, pitch, _ = rpy_from_quat(np.array(wxyz(msg)))
+    assert pitch == pytest.approx(-math.pi / 2, abs=1e-6)
+
+
+def test_camera_pose_without_a_mount_is_the_robot_pose():
+    ctx = ConvertContext(variables={"robot_name": "Drone1", "camera_name": "Cam"})
+    msg = camera_pose(sim_pose(), ctx)
+    assert xyz(msg) == [1.0, 2.0, -3.0]
+    assert wxyz(msg) == [1.0, 0.0, 0.0, 0.0]
+
+
+def test_camera_pose_uses_a_commanded_override_instead_of_the_mount():
+    shared = {("camera_pose", "Drone1", "DownCamera"): (np.array([0.0, 0.0, 2.0]), np.array([1.0, 0, 0, 0]))}
+    msg = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), camera_ctx(shared=shared))
+    assert xyz(msg) == [0.0, 0.0, 2.0]
+    assert wxyz(msg) == [1.0, 0.0, 0.0, 0.0]
+
+
+def test_camera_pose_override_for_another_camera_is_ignored():
+    shared = {("camera_pose", "Drone1", "Other"): (np.zeros(3), np.array([1.0, 0, 0, 0]))}
+    msg = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), camera_ctx(shared=shared))
+    assert xyz(msg) == pytest.approx([1.0, 0.0, 0.0])
+
+
+def test_camera_pose_in_enu_converts_the_composed_pose(roundtrip):
+    msg = camera_pose(sim_pose(position=(0.0, 0.0, -5.0)), camera_ctx("enu"))
+    assert xyz(msg) == pytest.approx([0.0, 1.0, 5.0])
+    assert roundtrip(msg) == msg
+
+
+def test_camera_pose_with_a_malformed_mount_is_rejected():
+    with pytest.raises(ConversionError, match=r"camera_pose: camera_origin: origin 'xyz' must hold three"):
+        camera_pose(sim_pose(), camera_ctx(origin={"xyz": "1 2"}))
+
+
+def test_a_camera_pose_command_feeds_the_published_camera_pose_in_both_conventions():
+    for convention in ("ned", "enu"):
+        ctx = camera_ctx(convention)
+        command = PoseStamped(
+            pose=Pose(position=Point(0.5, 0.25, 0.1), orientation=Quaternion(0.0, 0.0, 0.0, 1.0))
+        )
+        params = camera_desired_pose(command, ctx)
+        ctx.shared[camera_pose_key("Drone1", "DownCamera")] = camera_pose_override(params)
+        # a robot at the world origin with identity attitude in NED is the identity in NED, and faces
+        # north (yaw +90) in ENU; the camera is offset along the robot's axes in the command's convention
+        out = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), ctx)
+        expected = [0.5, 0.25, 0.1] if convention == "ned" else [-0.25, 0.5, 0.1]
+        assert xyz(out) == pytest.approx(expected)

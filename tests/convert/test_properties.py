@@ -1,0 +1,229 @@
+"""Property tests: whatever a sim message or ROS request holds, converters either return a message
+that genpy can serialise or raise ConversionError -- never anything else."""
+
+from __future__ import annotations
+
+import copy
+import io
+import math
+from typing import Any
+
+import numpy as np
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Twist, Vector3
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from std_msgs.msg import Header
+
+from airsim_mapper.convert import registry
+from airsim_mapper.convert.catalog import CONVERTERS, SIM_TO_ROS
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.mapping.model import Limits, Options
+
+POSE = {"position": {"x": 1.0, "y": 2.0, "z": 3.0}, "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}}
+VALID: dict[str, dict[str, Any]] = {
+    "pose": {"time_stamp": 1, **POSE},
+    "camera_pose": {"time_stamp": 1, **POSE},
+    "image": {"time_stamp": 1, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)},
+    "streaming_image": {"time_stamp": 1, "width": 1, "height": 1, "encoding": "16FC1", "data": bytes(2)},
+    "camera_info": {"time_stamp": 1, "width": 2, "height": 1},
+    "pointcloud": {
+        "time_stamp": 1,
+        "point_cloud": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        "intensity_cloud": [0.5, 0.25],
+        "segmentation_cloud": [1, 2],
+    },
+    "radar_scan": {
+        "time_stamp": 1,
+        "radar_detections": [
+            {"range": 1.0, "azimuth": 0.1, "elevation": 0.0, "velocity": 0.0, "rcs_sqm": 1.0}
+        ],
+    },
+    "radar_tracks": {
+        "time_stamp": 1,
+        "radar_tracks": [
+            {
+                "id": 3,
+                "position_est": {"x": 1.0, "y": 0.0, "z": 0.0},
+                "velocity_est": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "accel_est": {"x": 0.0, "y": 0.0, "z": 0.0},
+            }
+        ],
+    },
+    "clock": {"time_stamp": 1},
+    "imu": {
+        "time_stamp": 1,
+        "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+        "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.0},
+        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": -9.8},
+    },
+    "gps": {
+        "time_stamp": 1,
+        "latitude": 47.6,
+        "longitude": -122.1,
+        "altitude": 100.0,
+        "fix_type": 3,
+        "eph": 1.0,
+        "epv": 2.0,
+    },
+    "barometer": {"time_stamp": 1, "pressure": 101325.0},
+    "magnetometer": {
+        "time_stamp": 1,
+        "magnetic_field_body": {"x": 0.2, "y": 0.0, "z": 0.4},
+        "magnetic_field_covariance": [0.0] * 9,
+    },
+    "distance": {"time_stamp": 1, "current_distance": 3.0},
+    "battery": {
+        "time_stamp": 1,
+        "battery_pct_remaining": 50.0,
+        "battery_charge_state": "BATTERY_CHARGE_STATE_OK",
+    },
+    "airspeed": {"time_stamp": 1, "diff_pressure": 3.0},
+}
+SIM_CONVERTERS = sorted(name for name, info in CONVERTERS.items() if info.direction == SIM_TO_ROS)
+CONTEXTS = [ConvertContext(), ConvertContext(convention="enu", frame_id="map")]
+
+scalars = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(-(2**70), 2**70),
+    st.floats(width=32),
+    st.text(max_size=5),
+    st.binary(max_size=12),
+)
+junk = st.recursive(
+    scalars,
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=4), st.dictionaries(st.text(max_size=8), inner, max_size=4)
+    ),
+    max_leaves=12,
+)
+
+
+def serialises(msg: Any) -> None:
+    msg.serialize(io.BytesIO())
+
+
+def run_sim(name: str, msg: Any, ctx: ConvertContext) -> None:
+    try:
+        out = registry.get(name)(msg, ctx)
+    except ConversionError:
+        return
+    serialises(out)
+
+
+def test_every_sim_converter_has_a_valid_example_that_converts():
+    assert sorted(VALID) == SIM_CONVERTERS
+    for name in SIM_CONVERTERS:
+        for ctx in CONTEXTS:
+            serialises(registry.get(name)(copy.deepcopy(VALID[name]), ctx))
+
+
+@settings(max_examples=150, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(SIM_CONVERTERS), junk, st.sampled_from(CONTEXTS))
+def test_random_values_only_raise_conversion_error(name, value, ctx):
+    run_sim(name, value, ctx)
+
+
+def _paths(value: Any, prefix: tuple = ()) -> list[tuple]:
+    paths = [prefix] if prefix else []
+    if isinstance(value, dict):
+        for key, item in value.items():
+            paths += _paths(item, (*prefix, key))
+    elif isinstance(value, list):
+        for index, item in enumerate(value):
+            paths += _paths(item, (*prefix, index))
+    return paths
+
+
+def _mutate(msg: dict, path: tuple, action: str, replacement: Any) -> dict:
+    msg = copy.deepcopy(msg)
+    parent = msg
+    for key in path[:-1]:
+        parent = parent[key]
+    key = path[-1]
+    if action == "delete":
+        del parent[key]
+    elif action == "truncate" and isinstance(parent[key], (bytes, list)):
+        parent[key] = parent[key][: len(parent[key]) // 2]
+    else:
+        parent[key] = replacement
+    return msg
+
+
+@st.composite
+def mutated(draw):
+    name = draw(st.sampled_from(SIM_CONVERTERS))
+    base = VALID[name]
+    path = draw(st.sampled_from(_paths(base)))
+    action = draw(st.sampled_from(["delete", "truncate", "replace"]))
+    return name, _mutate(base, path, action, draw(junk))
+
+
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
+@given(mutated(), st.sampled_from(CONTEXTS))
+def test_damaged_valid_messages_only_raise_conversion_error(case, ctx):
+    name, msg = case
+    run_sim(name, msg, ctx)
+
+
+@given(st.integers(0, 64), st.sampled_from(["BGR", "16FC1", "16UC1", "GRAY8", "PNG"]))
+def test_truncated_image_data_only_raises_conversion_error(keep, encoding):
+    msg = {"time_stamp": 1, "width": 4, "height": 4, "encoding": encoding, "data": bytes(range(64))[:keep]}
+    run_sim("image", msg, ConvertContext())
+
+
+floats = st.floats(width=32)
+LIMITED = ConvertContext(
+    options=Options(limits=Limits(max_linear_speed=2.0, max_vertical_speed=1.0, max_yaw_rate=1.0))
+)
+
+
+@given(floats, floats, floats, floats, st.sampled_from([*CONTEXTS, LIMITED]))
+def test_cmd_vel_returns_finite_bounded_params_or_conversion_error(vx, vy, vz, yaw, ctx):
+    twist = Twist(linear=Vector3(vx, vy, vz), angular=Vector3(0.0, 0.0, yaw))
+    try:
+        params = registry.get("cmd_vel")(twist, ctx)
+    except ConversionError:
+        assert not all(math.isfinite(v) for v in (vx, vy, vz, yaw))
+        return
+    values = np.array([params["vx"], params["vy"], params["vz"], params["yaw"]])
+    assert np.isfinite(values).all()
+    if ctx is LIMITED:
+        assert np.linalg.norm(values[:3]) <= 2.0 + 1e-9
+        assert abs(values[2]) <= 1.0 and abs(values[3]) <= 1.0
+
+
+@given(
+    st.tuples(floats, floats, floats), st.tuples(floats, floats, floats, floats), st.sampled_from(CONTEXTS)
+)
+def test_pose_commands_return_unit_quaternions_or_conversion_error(position, q, ctx):
+    w, x, y, z = q
+    msg = PoseStamped(
+        header=Header(frame_id=""), pose=Pose(position=Point(*position), orientation=Quaternion(x, y, z, w))
+    )
+    for name in ("desired_pose", "camera_desired_pose"):
+        try:
+            params = registry.get(name)(msg, ctx)
+        except ConversionError:
+            continue
+        rotation = params["orientation"] if name == "desired_pose" else params["pose"]["rotation"]
+        assert math.isclose(math.sqrt(sum(v * v for v in rotation.values())), 1.0, rel_tol=1e-9)
+
+
+@given(st.tuples(floats, floats, floats), st.tuples(floats, floats, floats, floats))
+def test_enu_pose_command_round_trips_through_the_pose_converter(position, q):
+    w, x, y, z = q
+    if not all(math.isfinite(v) and abs(v) < 1e6 for v in (*position, *q)):
+        return
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
+    if not 0.5 <= norm <= 2.0:
+        return
+    enu = ConvertContext(convention="enu")
+    msg = PoseStamped(pose=Pose(position=Point(*position), orientation=Quaternion(x, y, z, w)))
+    sim = registry.get("desired_pose")(msg, enu)
+    back = registry.get("pose")({"time_stamp": 0, **sim}, enu).pose
+    assert [back.position.x, back.position.y, back.position.z] == np.asarray(position).tolist()
+    original = np.array([w, x, y, z]) / norm
+    returned = np.array([back.orientation.w, back.orientation.x, back.orientation.y, back.orientation.z])
+    assert np.allclose(returned, original, atol=1e-9) or np.allclose(returned, -original, atol=1e-9)

@@ -1,0 +1,67 @@
+"""Sim nanosecond stamps become exact rospy.Time values; headers follow the context."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import rospy
+from hypothesis import given
+from hypothesis import strategies as st
+
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.stamps import MAX_STAMP_NS, convert_stamp, header
+
+
+def test_stamp_splits_into_seconds_and_nanoseconds():
+    stamp = convert_stamp(12_345_678_901)
+    assert (stamp.secs, stamp.nsecs) == (12, 345_678_901)
+
+
+def test_large_stamps_keep_every_nanosecond():
+    ns = 1_763_771_234_123_456_789  # a Unix-epoch stamp where float seconds would round
+    stamp = convert_stamp(ns)
+    assert stamp.to_nsec() == ns
+    assert stamp.nsecs == 123_456_789
+
+
+def test_numpy_integers_are_accepted():
+    assert convert_stamp(np.int64(5)).to_nsec() == 5
+
+
+@given(st.integers(0, MAX_STAMP_NS))
+def test_every_representable_stamp_round_trips(ns):
+    assert convert_stamp(ns).to_nsec() == ns
+
+
+@pytest.mark.parametrize("bad", [1.5, "10", None, True])
+def test_non_integer_stamps_are_rejected(bad):
+    with pytest.raises(ConversionError, match=r"time_stamp must be integer nanoseconds"):
+        convert_stamp(bad)
+
+
+@pytest.mark.parametrize("bad", [-1, MAX_STAMP_NS + 1])
+def test_stamps_outside_ros1_time_are_rejected(bad):
+    with pytest.raises(ConversionError, match=f"time_stamp {bad} ns is outside the ROS1 time range"):
+        convert_stamp(bad)
+
+
+def test_header_takes_frame_and_sim_stamp_from_the_context():
+    result = header({"time_stamp": 3_000_000_007}, ConvertContext(frame_id="map"))
+    assert result.frame_id == "map"
+    assert result.stamp == rospy.Time(3, 7)
+
+
+def test_header_with_ros_stamp_uses_now_and_ignores_the_sim_stamp():
+    ctx = ConvertContext(stamp="ros", now=lambda: rospy.Time(42, 1))
+    assert header({}, ctx).stamp == rospy.Time(42, 1)
+
+
+def test_header_without_a_time_stamp_is_rejected():
+    with pytest.raises(ConversionError, match=r"message has no 'time_stamp'"):
+        header({}, ConvertContext())
+
+
+def test_header_of_a_non_map_is_rejected():
+    with pytest.raises(ConversionError, match=r"message must be a map, got list"):
+        header([], ConvertContext())

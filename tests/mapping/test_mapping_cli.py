@@ -1,0 +1,112 @@
+"""validate-mapping: output formats and exit statuses."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import pytest
+from harness import ROOT, SIM_CONFIG, VENV_BIN
+
+from airsim_mapper.cli.validate import format_table, load_and_expand, main
+from airsim_mapper.mapping.errors import ConfigError, MappingError
+from airsim_mapper.scene import SceneError
+
+DEFAULT = ROOT / "mappings" / "default.yaml"
+
+
+def test_a_valid_mapping_without_a_scene_exits_0_and_lists_its_rules(capsys):
+    assert main([str(DEFAULT)]) == 0
+    out = capsys.readouterr().out
+    assert "/airsim_node/<robot_name>/<camera_name>/<image_type>/image" in out
+    assert out.rstrip().endswith("valid, 14 rules")
+
+
+def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene():
+    result = subprocess.run(
+        [
+            str(VENV_BIN / "validate-mapping"),
+            "mappings/default.yaml",
+            "--scene",
+            "scene_drone_sensors.jsonc",
+            "--simconfigpath",
+            str(SIM_CONFIG),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0].split() == ["DIRECTION", "SIMULATOR", "ROS", "TYPE", "FRAME"]
+    assert lines[-1] == "35 bridges"
+    pose = next(line for line in lines if " /airsim_node/Drone1/actual_pose " in line)
+    assert pose.split() == [
+        "sim_to_ros",
+        "/Sim/SceneDroneSensors/robots/Drone1/actual_pose",
+        "/airsim_node/Drone1/actual_pose",
+        "geometry_msgs/PoseStamped",
+        "map",
+    ]
+
+
+def test_json_format_prints_one_array_of_bridges_with_the_documented_keys(capsys):
+    argv = [str(DEFAULT), "--scene", "scene_lidar_drone.jsonc", "--simconfigpath", str(SIM_CONFIG)]
+    assert main([*argv, "--format", "json", "--nodename", "bridge7"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert all(
+        {"direction", "sim", "ros", "ros_type", "converter", "frame_id", "rule", "name", "tf"} <= set(r)
+        for r in rows
+    )
+    load = rows[0]
+    assert (load["name"], load["ros"], load["sim"], load["frame_id"], load["tf"]) == (
+        "load_scene[bridge7]",
+        "/ProjectAirSim/node/bridge7/load_scene",
+        None,
+        None,
+        None,
+    )
+    lidar = next(row for row in rows if row["rule"] == "lidar")
+    assert lidar["tf"] == {"parent": "map", "child": "airsim_node/Drone1/lidar1"}
+    assert {row["direction"] for row in rows} == {"sim_to_ros", "ros_to_sim"}
+
+
+def test_usage_errors_exit_2(capsys):
+    assert main([]) == 2
+    assert main([str(DEFAULT), "--format", "yaml"]) == 2
+    assert "usage: validate-mapping" in capsys.readouterr().err
+
+
+def test_an_unreadable_mapping_file_exits_2_naming_the_file(tmp_path, capsys):
+    missing = tmp_path / "nope.yaml"
+    assert main([str(missing)]) == 2
+    assert (
+        capsys.readouterr().err.strip()
+        == f"{missing}: cannot read the mapping file: No such file or directory"
+    )
+
+
+def test_a_missing_scene_file_exits_2_and_an_invalid_scene_exits_1(tmp_path, capsys):
+    assert main([str(DEFAULT), "--scene", "absent.jsonc", "--simconfigpath", str(SIM_CONFIG)]) == 2
+    assert "absent.jsonc: cannot read the scene file" in capsys.readouterr().err
+    (tmp_path / "bad.jsonc").write_text('{"id": 5}')
+    assert main([str(DEFAULT), "--scene", "bad.jsonc", "--simconfigpath", str(tmp_path)]) == 1
+    assert "does not match the scene schema: id: 5 is not of type 'string'" in capsys.readouterr().err
+
+
+def test_load_and_expand_returns_the_mapping_scene_and_bridges():
+    mapping, scene, bridges = load_and_expand(DEFAULT, "scene_basic_drone.jsonc", SIM_CONFIG, "n1", "")
+    assert (len(mapping.rules), scene.name, bridges[0].name) == (14, "SceneBasicDrone", "load_scene[n1]")
+    table = format_table(bridges)
+    assert len(table.splitlines()) == len(bridges) + 1
+
+
+def test_load_and_expand_raises_config_errors_whose_text_is_the_full_report(tmp_path):
+    broken = tmp_path / "m.yaml"
+    broken.write_text("version: 1\nrules: 3\n")
+    with pytest.raises(ConfigError, match="rules: expected array, got 3") as caught:
+        load_and_expand(broken, "scene_basic_drone.jsonc", SIM_CONFIG, "n1")
+    assert isinstance(caught.value, MappingError)
+    assert str(caught.value) == f"{broken}:2:8: rules: expected array, got 3"
+    assert issubclass(SceneError, ConfigError)

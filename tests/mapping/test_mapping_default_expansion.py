@@ -1,0 +1,164 @@
+"""The default mapping expands every shared scene to exactly the documented interface."""
+
+from __future__ import annotations
+
+import pytest
+from harness import ROOT, SIM_CONFIG
+
+from airsim_mapper.mapping.expand import expand
+from airsim_mapper.mapping.loader import load_mapping
+from airsim_mapper.scene import read_scene
+
+DEFAULT = ROOT / "mappings" / "default.yaml"
+LOAD_SCENE = "/ProjectAirSim/node/projectairsim/load_scene"
+STREAMING = ["/airsim_streaming_camera/image_raw", "/airsim_streaming_camera/switch_view"]
+
+# scene_drone_sensors.jsonc, written out in full from the seed's topic list.
+DRONE_SENSORS_TOPICS = [
+    LOAD_SCENE,
+    "/airsim_node/Drone1/actual_pose",
+    "/airsim_node/Drone1/cmd_vel",
+    "/airsim_node/Drone1/desired_pose",
+    "/airsim_node/Drone1/Chase/desired_pose",
+    "/airsim_node/Drone1/DownCamera/desired_pose",
+    "/airsim_node/Drone1/Chase/camera_pose",
+    "/airsim_node/Drone1/DownCamera/camera_pose",
+    "/airsim_node/Drone1/Chase/scene_camera/image",
+    "/airsim_node/Drone1/DownCamera/scene_camera/image",
+    "/airsim_node/Drone1/DownCamera/depth_planar_camera/image",
+    "/airsim_node/Drone1/DownCamera/depth_camera/image",
+    "/airsim_node/Drone1/DownCamera/segmentation_camera/image",
+    "/airsim_node/Drone1/DownCamera/depth_vis_camera/image",
+    "/airsim_node/Drone1/DownCamera/disparity_normalized_camera/image",
+    "/airsim_node/Drone1/DownCamera/surface_normals/image",
+    "/airsim_node/Drone1/Chase/scene_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/scene_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/depth_planar_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/depth_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/segmentation_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/depth_vis_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info",
+    "/airsim_node/Drone1/DownCamera/surface_normals/camera_info",
+    "/airsim_node/Drone1/lidar1/lidar",
+    *STREAMING,
+]
+
+
+def _basic_drone(robot: str) -> list[str]:
+    """robot_quadrotor_fastphysics.jsonc: Chase (scene), DownCamera (scene, depth); no lidar or radar."""
+    return [
+        f"/airsim_node/{robot}/actual_pose",
+        f"/airsim_node/{robot}/cmd_vel",
+        f"/airsim_node/{robot}/desired_pose",
+        f"/airsim_node/{robot}/Chase/desired_pose",
+        f"/airsim_node/{robot}/DownCamera/desired_pose",
+        f"/airsim_node/{robot}/Chase/camera_pose",
+        f"/airsim_node/{robot}/DownCamera/camera_pose",
+        f"/airsim_node/{robot}/Chase/scene_camera/image",
+        f"/airsim_node/{robot}/DownCamera/scene_camera/image",
+        f"/airsim_node/{robot}/DownCamera/depth_camera/image",
+        f"/airsim_node/{robot}/Chase/scene_camera/camera_info",
+        f"/airsim_node/{robot}/DownCamera/scene_camera/camera_info",
+        f"/airsim_node/{robot}/DownCamera/depth_camera/camera_info",
+    ]
+
+
+EXPECTED = {
+    "scene_basic_drone.jsonc": [LOAD_SCENE, *_basic_drone("Drone1"), *STREAMING],
+    "scene_drone_sensors.jsonc": DRONE_SENSORS_TOPICS,
+    "scene_lidar_drone.jsonc": [
+        LOAD_SCENE,
+        *_basic_drone("Drone1"),
+        "/airsim_node/Drone1/lidar1/lidar",
+        *STREAMING,
+    ],
+    "scene_radar_tower.jsonc": [
+        LOAD_SCENE,
+        *_basic_drone("Drone1"),
+        "/airsim_node/RadarTower1/actual_pose",
+        "/airsim_node/RadarTower1/cmd_vel",
+        "/airsim_node/RadarTower1/desired_pose",
+        "/airsim_node/RadarTower1/radar1/radar_detections",
+        "/airsim_node/RadarTower1/radar1/radar_tracks",
+        *STREAMING,
+    ],
+    "scene_two_drones_sensors.jsonc": [
+        LOAD_SCENE,
+        *_basic_drone("Drone1"),
+        *[topic.replace("Drone1", "Drone2") for topic in DRONE_SENSORS_TOPICS[1:-2]],
+        *STREAMING,
+    ],
+}
+
+
+@pytest.fixture(scope="module")
+def default_mapping():
+    return load_mapping(DEFAULT)
+
+
+def test_every_shared_scene_has_an_expected_topic_list():
+    assert sorted(path.name for path in SIM_CONFIG.glob("scene_*.jsonc")) == sorted(EXPECTED)
+
+
+@pytest.mark.parametrize("scene_file", sorted(EXPECTED))
+def test_default_mapping_expands_each_scene_to_exactly_the_documented_topics(default_mapping, scene_file):
+    bridges = expand(default_mapping, read_scene(SIM_CONFIG, scene_file), "projectairsim")
+    topics = [bridge.ros for bridge in bridges if bridge.ros is not None]
+    assert sorted(topics) == sorted(EXPECTED[scene_file])
+    assert len(topics) == len(set(topics))
+
+
+def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sensors(default_mapping):
+    bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_drone_sensors.jsonc"), "projectairsim")
+    by_ros = {bridge.ros: bridge for bridge in bridges}
+    pose = by_ros["/airsim_node/Drone1/actual_pose"]
+    assert (pose.ros_type, pose.frame_id, pose.options.latch, pose.options.lazy) == (
+        "geometry_msgs/PoseStamped",
+        "map",
+        True,
+        False,
+    )
+    assert (pose.tf.parent, pose.tf.child) == ("map", "airsim_node/Drone1")
+    assert pose.sim == "/Sim/SceneDroneSensors/robots/Drone1/actual_pose"
+    cmd = by_ros["/airsim_node/Drone1/cmd_vel"]
+    assert (cmd.sim, cmd.options.watchdog_s, dict(cmd.params)) == (
+        "/Sim/SceneDroneSensors/robots/Drone1/MoveByVelocityBodyFrame",
+        3.0,
+        {"frame": "body"},
+    )
+    normals = by_ros["/airsim_node/Drone1/DownCamera/surface_normals/image"]
+    assert normals.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/surface_normals_camera"
+    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals"
+    info = by_ros["/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info"]
+    assert info.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/disparity_normalized_camera"
+    lidar = by_ros["/airsim_node/Drone1/lidar1/lidar"]
+    assert (lidar.ros_type, lidar.frame_id, lidar.tf.child) == (
+        "sensor_msgs/PointCloud2",
+        "airsim_node/Drone1/lidar1",
+        "airsim_node/Drone1/lidar1",
+    )
+    switch = by_ros["/airsim_streaming_camera/switch_view"]
+    assert (switch.ros_kind, switch.sim) == ("service", "/Sim/SceneDroneSensors/SwitchStreamingView")
+    load = by_ros[LOAD_SCENE]
+    assert (load.sim, load.sim_kind, load.ros_type) == (None, "node", "std_msgs/String")
+    assert {b.convention for b in bridges} == {"ned"}
+
+
+def test_default_mapping_broadcasts_one_camera_frame_per_capture_enabled_image_type(default_mapping):
+    bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_basic_drone.jsonc"), "projectairsim")
+    children = sorted(bridge.tf.child for bridge in bridges if bridge.ros is None)
+    assert children == [
+        "airsim_node/Drone1/Chase/scene_camera",
+        "airsim_node/Drone1/DownCamera/depth_camera",
+        "airsim_node/Drone1/DownCamera/scene_camera",
+    ]
+
+
+def test_radar_bridges_use_the_radar_frame_and_detections_broadcast_its_tf(default_mapping):
+    bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_radar_tower.jsonc"), "projectairsim")
+    radar = [b for b in bridges if b.variables.get("radar_name") == "radar1"]
+    assert [(b.ros_type, b.frame_id) for b in radar] == [
+        ("radar_msgs/RadarScan", "airsim_node/RadarTower1/radar1"),
+        ("radar_msgs/RadarTracks", "airsim_node/RadarTower1/radar1"),
+    ]
+    assert radar[0].tf.child == "airsim_node/RadarTower1/radar1"

@@ -1,0 +1,166 @@
+"""Expansion of rules over a scene: names, variables, sources, disabled things, collisions."""
+
+from __future__ import annotations
+
+import pytest
+from scene_builders import camera, capture
+
+from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.expand import expand
+from airsim_mapper.mapping.loader import load_mapping_text
+from airsim_mapper.scene import read_scene
+
+HEADER = "version: 1\nrules:\n"
+
+
+def rule(name: str, for_each: str, ros: str | None, **extra: str) -> str:
+    """A sim_to_ros pose rule in flow style (the pose converter fits any domain for these tests)."""
+    fields = {
+        "name": name,
+        "for_each": for_each,
+        "direction": "sim_to_ros",
+        "sim": "/sim/<node_name>/x",
+        "type": "geometry_msgs/PoseStamped",
+        "converter": "pose",
+        **({"ros": ros} if ros else {}),
+        **extra,
+    }
+    return "  - {" + ", ".join(f"{k}: {v}" for k, v in fields.items()) + "}\n"
+
+
+LIDAR = {"id": "lid", "type": "lidar", "enabled": True, "parent-link": "Frame"}
+
+
+@pytest.fixture
+def scene(write_scene):
+    root = write_scene(
+        {
+            "R1": [
+                camera("Front", [capture(0, streaming=True), capture(1, enabled=False), capture(6)]),
+                camera("Off", [capture(0)], enabled=False),
+                LIDAR,
+                {**LIDAR, "id": "lid_off", "enabled": False},
+            ],
+            "R2": [camera("Back", [capture(0, streaming=True)])],
+        },
+        scene_id="S",
+    )
+    return read_scene(root, "scene.jsonc")
+
+
+def test_bridges_are_named_per_scene_element_in_rule_then_scene_order(scene):
+    text = HEADER + "".join(
+        rule(f"r_{d}", d, f"/{d}/<robot_name>" if d not in ("node", "scene", "streaming_camera") else f"/{d}")
+        for d in ("node", "scene", "robot", "camera", "camera_capture", "lidar", "streaming_camera")
+    )
+    text = text.replace("/camera/<robot_name>", "/camera/<robot_name>/<camera_name>")
+    text = text.replace("/camera_capture/<robot_name>", "/cc/<robot_name>/<camera_name>/<image_type>")
+    names = [b.name for b in expand(load_mapping_text(text), scene, "nodeA")]
+    assert names == [
+        "r_node[nodeA]",
+        "r_scene[S]",
+        "r_robot[R1]",
+        "r_robot[R2]",
+        "r_camera[R1/Front]",
+        "r_camera[R2/Back]",
+        "r_camera_capture[R1/Front/scene_camera]",
+        "r_camera_capture[R1/Front/surface_normals]",
+        "r_camera_capture[R2/Back/scene_camera]",
+        "r_lidar[R1/lid]",
+        "r_streaming_camera[S]",
+    ]
+
+
+def test_camera_capture_bridges_carry_the_capture_setting_and_the_camera_mount(scene):
+    mapping = load_mapping_text(
+        HEADER + rule("img", "camera_capture", "/<robot_name>/<camera_name>/<image_type>")
+    )
+    bridge = expand(mapping, scene, "n")[1]
+    assert dict(bridge.variables) == {
+        "node_name": "n",
+        "namespace": "",
+        "scene_name": "S",
+        "robot_name": "R1",
+        "camera_name": "Front",
+        "image_type": "surface_normals",
+        "image_type_id": "6",
+        "sim_image_type": "surface_normals_camera",
+    }
+    assert bridge.source["width"] == 320
+    assert bridge.source["image-type"] == 6
+    assert bridge.source["camera_origin"] == {"xyz": "0.3 0 0", "rpy-deg": "0 0 0"}
+
+
+def test_robot_bridges_carry_the_actor_without_its_robot_config_and_sensors_their_config(scene):
+    text = (
+        HEADER
+        + rule("r", "robot", "/<robot_name>")
+        + rule("l", "lidar", "/<robot_name>/<lidar_name>/<sensor_name>")
+    )
+    robot, _, lidar = expand(load_mapping_text(text), scene, "n")
+    assert dict(robot.source) == {
+        "type": "robot",
+        "name": "R1",
+        "origin": {"xyz": "0 0 -4", "rpy-deg": "0 0 0"},
+    }
+    assert lidar.ros == "/R1/lid/lid"
+    assert lidar.source["id"] == "lid"
+
+
+def test_the_streaming_camera_domain_expands_once_and_lists_every_streaming_camera(scene):
+    text = HEADER + rule("s", "streaming_camera", "/stream", frame_id="<robot_name>/<camera_name>")
+    (bridge,) = expand(load_mapping_text(text), scene, "n")
+    assert bridge.frame_id == "R1/Front"
+    assert bridge.source["cameras"] == [
+        {"robot_name": "R1", "camera_name": "Front", "sim": "/Sim/S/robots/R1/sensors/Front/scene_camera"},
+        {"robot_name": "R2", "camera_name": "Back", "sim": "/Sim/S/robots/R2/sensors/Back/scene_camera"},
+    ]
+
+
+def test_no_streaming_bridge_without_a_streaming_camera(write_scene):
+    scene = read_scene(write_scene({"R": [camera("C", [capture(0)])]}), "scene.jsonc")
+    assert expand(load_mapping_text(HEADER + rule("s", "streaming_camera", "/stream")), scene, "n") == ()
+
+
+def test_disabled_rules_and_disabled_sensors_produce_nothing(scene):
+    text = (
+        HEADER
+        + rule("a", "lidar", "/<robot_name>/<lidar_name>", enabled="false")
+        + rule("b", "lidar", "/b/<lidar_name>")
+    )
+    assert [b.ros for b in expand(load_mapping_text(text), scene, "n")] == ["/b/lid"]
+
+
+def test_the_namespace_variable_prefixes_names(scene):
+    mapping = load_mapping_text(HEADER + rule("r", "robot", "<namespace>/airsim_node/<robot_name>/pose"))
+    assert [b.ros for b in expand(mapping, scene, "n")] == ["/airsim_node/R1/pose", "/airsim_node/R2/pose"]
+    assert [b.ros for b in expand(mapping, scene, "n", "/sim2")] == [
+        "/sim2/airsim_node/R1/pose",
+        "/sim2/airsim_node/R2/pose",
+    ]
+
+
+def test_two_rules_that_collide_only_after_expansion_are_an_error(scene):
+    text = HEADER + rule("a", "robot", "/x/<robot_name>") + rule("b", "node", "/x/R2")
+    with pytest.raises(MappingError) as caught:
+        expand(load_mapping_text(text, "m.yaml"), scene, "n")
+    assert (
+        str(caught.value)
+        == "m.yaml:4:1: bridge b[n]: ROS name '/x/R2' is also produced by a[R2] (rule at line 3)"
+    )
+
+
+def test_a_scene_name_that_makes_an_illegal_ros_name_is_an_error(write_scene):
+    scene = read_scene(write_scene({"Drone-1": []}), "scene.jsonc")
+    mapping = load_mapping_text(HEADER + rule("r", "robot", "/airsim_node/<robot_name>/pose"), "m.yaml")
+    with pytest.raises(
+        MappingError,
+        match=r"m\.yaml:3:1: bridge r\[Drone-1\]: ROS name '/airsim_node/Drone-1/pose' is not valid",
+    ):
+        expand(mapping, scene, "n")
+
+
+def test_expansion_is_deterministic(scene):
+    text = HEADER + rule("c", "camera_capture", "/<robot_name>/<camera_name>/<image_type>")
+    mapping = load_mapping_text(text)
+    assert expand(mapping, scene, "n") == expand(mapping, scene, "n")

@@ -1,0 +1,133 @@
+"""Loading mappings: defaults, options, safe YAML with marks, and errors reported all at once."""
+
+from __future__ import annotations
+
+import pytest
+
+from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.loader import DEFAULT_IMAGE_TYPES, load_mapping_text
+from airsim_mapper.mapping.model import Limits
+from airsim_mapper.mapping.yamlmarks import load_marked
+
+CMD_VEL = """
+version: 1
+defaults: {queue_size: 5, stamp: ros, convention: enu, limits: {max_linear_speed: 2.0}}
+rules:
+  - name: cmd_vel
+    for_each: robot
+    direction: ros_to_sim
+    sim: /Sim/<scene_name>/robots/<robot_name>/MoveByVelocity
+    ros: /airsim_node/<robot_name>/cmd_vel
+    type: geometry_msgs/Twist
+    converter: cmd_vel
+    watchdog_s: 1.5
+    limits: {max_yaw_rate: 0.5, on_violation: reject}
+    params: {frame: world}
+  - name: pose
+    for_each: robot
+    direction: sim_to_ros
+    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose
+    ros: <namespace>/airsim_node/<robot_name>/actual_pose
+    type: geometry_msgs/PoseStamped
+    converter: pose
+    convention: ned
+    queue_size: 1
+    enabled: false
+"""
+
+
+def test_rules_take_the_defaults_they_do_not_set_and_keep_their_own():
+    mapping = load_mapping_text(CMD_VEL, "m.yaml")
+    cmd, pose = mapping.rules
+    assert (cmd.options.queue_size, cmd.options.stamp, cmd.options.watchdog_s, cmd.convention) == (
+        5,
+        "ros",
+        1.5,
+        "enu",
+    )
+    assert cmd.options.limits == Limits(max_linear_speed=2.0, max_yaw_rate=0.5, on_violation="reject")
+    assert dict(cmd.params) == {"frame": "world"}
+    assert (cmd.line, cmd.ros_kind) == (5, "topic")
+    assert (pose.options.queue_size, pose.options.enabled, pose.convention) == (1, False, "ned")
+    assert dict(mapping.image_types) == DEFAULT_IMAGE_TYPES
+    assert mapping.source == "m.yaml"
+
+
+def test_a_service_type_makes_a_service_rule():
+    text = """
+version: 1
+rules:
+  - {name: sw, for_each: streaming_camera, direction: ros_to_sim, sim: /Sim/<scene_name>/SwitchStreamingView,
+     ros: /airsim_streaming_camera/switch_view, type: std_srvs/Trigger, converter: switch_view}
+"""
+    assert load_mapping_text(text).rules[0].ros_kind == "service"
+
+
+def test_a_custom_image_type_table_must_name_all_seven_types():
+    text = "version: 1\nimage_types: {0: rgb, 1: depth}\nrules: []\n"
+    with pytest.raises(MappingError, match=r"^t\.yaml:2:14: image_types: '2' is required"):
+        load_mapping_text(text, "t.yaml")
+
+
+def test_a_tf_only_rule_needs_tf():
+    text = """version: 1
+rules:
+  - {name: t, for_each: robot, direction: sim_to_ros, sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose,
+     converter: pose}
+"""
+    with pytest.raises(
+        MappingError, match=r"t\.yaml:3:5: rule 't': 'ros' is required \(only a sim_to_ros rule"
+    ):
+        load_mapping_text(text, "t.yaml")
+
+
+def test_a_ros_side_needs_a_type():
+    text = """version: 1
+rules:
+  - {name: t, for_each: node, direction: ros_to_sim, ros: /load, converter: load_scene}
+"""
+    with pytest.raises(MappingError, match=r"t\.yaml:3:59: rule 't': 'type' is required when 'ros' is set"):
+        load_mapping_text(text, "t.yaml")
+
+
+def test_rules_must_be_a_list_of_rules():
+    with pytest.raises(MappingError, match=r"^t\.yaml:2:8: rules: expected array, got \{\}$"):
+        load_mapping_text("version: 1\nrules: {}\n", "t.yaml")
+
+
+def test_the_loader_reports_problems_from_every_rule_at_once():
+    text = CMD_VEL.replace("converter: cmd_vel", "converter: cmd_vell").replace(
+        "queue_size: 1\n", "queue_size: 0\n"
+    )
+    with pytest.raises(MappingError) as caught:
+        load_mapping_text(text, "m.yaml")
+    assert str(caught.value).splitlines() == [
+        "m.yaml:11:16: rule 'cmd_vel': unknown converter 'cmd_vell' (did you mean 'cmd_vel'?)",
+        "m.yaml:23:17: rules[1] 'pose'.queue_size: 0 is less than the minimum of 1",
+    ]
+
+
+def test_python_tags_are_refused_and_never_executed(tmp_path):
+    marker = tmp_path / "ran"
+    text = f"version: 1\nrules: []\nx: !!python/object/apply:os.system ['touch {marker}']\n"
+    with pytest.raises(MappingError, match=r"t\.yaml:3:4: invalid YAML value: the tag .*python/object/apply"):
+        load_mapping_text(text, "t.yaml")
+    with pytest.raises(
+        MappingError,
+        match=r"could not determine a constructor for the tag 'tag:yaml\.org,2002:python/object:",
+    ):
+        load_marked("a: !!python/object:collections.OrderedDict\n", "t.yaml")
+    assert not marker.exists()
+
+
+def test_marks_locate_keys_and_values():
+    data, marks = load_marked("a:\n  - b: 1\n    c: [x, y]\n", "t.yaml")
+    assert data == {"a": [{"b": 1, "c": ["x", "y"]}]}
+    assert marks.key(("a", 0, "c")) == (3, 5)
+    assert marks.value(("a", 0, "c", 1)) == (3, 12)
+    assert marks.value(("a", 0, "missing")) == (2, 5)
+
+
+def test_recursive_aliases_are_an_error_not_a_hang():
+    with pytest.raises(MappingError, match=r"t\.yaml:1:\d+: recursive or too deeply nested YAML"):
+        load_marked("a: &x [1, *x]\n", "t.yaml")

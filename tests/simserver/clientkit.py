@@ -1,0 +1,62 @@
+"""Helpers for driving the headless server with the real `projectairsim` 1.1.0 client in tests."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from harness import SIM_CONFIG, HarnessError
+
+
+class Inbox:
+    """Messages received on one topic by a client subscription (thread-safe)."""
+
+    def __init__(self) -> None:
+        self.messages: list[Any] = []
+        self.arrivals: list[float] = []
+        self._cond = threading.Condition()
+
+    def __call__(self, _topic: Any, message: Any) -> None:
+        with self._cond:
+            self.messages.append(message)
+            self.arrivals.append(time.monotonic())
+            self._cond.notify_all()
+
+    def wait_for(
+        self, count: int = 1, timeout: float = 5.0, where: Callable[[Any], bool] | None = None
+    ) -> list:
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while True:
+                matching = [m for m in self.messages if where is None or where(m)]
+                if len(matching) >= count:
+                    return matching
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    raise HarnessError(f"got {len(matching)} of {count} messages within {timeout} s")
+                self._cond.wait(remaining)
+
+
+def subscribe(client: Any, topic: str) -> Inbox:
+    inbox = Inbox()
+    client.subscribe(topic, inbox)
+    return inbox
+
+
+def load_world(client: Any, scene_file: str) -> Any:
+    from projectairsim import World
+
+    return World(client, scene_file, sim_config_path=str(SIM_CONFIG))
+
+
+def run_async(coroutine_factory: Callable[[], Any]) -> Any:
+    """Run an async client interaction (the `*_async` drone methods need a running loop)."""
+    return asyncio.run(coroutine_factory())
+
+
+def position(drone: Any) -> list[float]:
+    translation = drone.get_ground_truth_pose()["translation"]
+    return [translation["x"], translation["y"], translation["z"]]

@@ -1,0 +1,27 @@
+"""Fixtures for the simulator server tests: a server per test, or one per module for read-mostly tests."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import pytest
+from harness import Launcher
+from simharness import SimServer, start_simserver
+
+
+@pytest.fixture
+def simserver(launcher: Launcher) -> SimServer:
+    """A fresh headless server on free ports, stopped at teardown."""
+    return start_simserver(launcher)
+
+
+@pytest.fixture(scope="module")
+def shared_simserver(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SimServer]:
+    """One server for a whole test module (each test loads its own scene)."""
+    launcher = Launcher(tmp_path_factory.mktemp("simserver"), dict(os.environ))
+    try:
+        yield start_simserver(launcher)
+    finally:
+        launcher.stop_all()
+        print(launcher.dump_logs())

@@ -1,0 +1,178 @@
+"""Lidar: the configured scan pattern, points on known surfaces, stateful azimuth, config errors."""
+
+from __future__ import annotations
+
+import math
+
+import commentjson
+import numpy as np
+import pytest
+from harness import SIM_CONFIG
+
+from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
+from airsim_mapper.simserver.lidar import LidarError, LidarModel
+from airsim_mapper.simserver.world import World, load_world
+
+LEVEL = np.array([1.0, 0.0, 0.0, 0.0])
+TENTH_S = 100_000_000
+
+
+@pytest.fixture(scope="module")
+def world() -> World:
+    return load_world()
+
+
+@pytest.fixture
+def lidar_config() -> dict:
+    """The lidar of the real sensor-rich quadrotor config: 16 channels, 0..-90 deg, 100k pts/s, 10 Hz."""
+    robot = commentjson.loads((SIM_CONFIG / "robot_quadrotor_fastphysics_sensors.jsonc").read_text())
+    return dict(next(s for s in robot["sensors"] if s["type"] == "lidar"))
+
+
+def world_points(scan: dict, position, orientation) -> np.ndarray:
+    local = scan["point_cloud"].reshape(-1, 3).astype(float)
+    return local @ quat_to_matrix(orientation).T + position
+
+
+def test_the_model_reads_the_real_config(lidar_config):
+    model = LidarModel.from_config(lidar_config)
+    assert model.channels == 16 and model.range_m == 100.0
+    assert model.points_per_second == 100000 and model.rotation_hz == 10
+    assert np.allclose(model.elevations_deg, np.linspace(0.0, -90.0, 16))
+    assert np.allclose(model.mount_position, [0.0, 0.0, 0.2])
+    assert model.column_step_deg == pytest.approx(360 * 10 * 16 / 100000)
+
+
+def test_one_rotation_fires_points_per_second_over_frequency_rays_in_column_order(world, lidar_config):
+    model = LidarModel.from_config(lidar_config)
+    position = np.array([-40.0, 40.0, -4.0])  # open ground, nothing around
+    scan = model.scan(world, position, LEVEL, 0, TENTH_S)
+    lasers = scan["laser_index_cloud"]
+    columns = 100000 // 10 // 16
+    counts = np.bincount(lasers, minlength=16)
+    # every channel looking down by more than asin(4 / 100) reaches the ground within range
+    assert (counts[1:] == columns).all()
+    assert counts[0] == 0  # the horizontal channel sees nothing within 100 m here
+    assert scan["point_cloud"].dtype == np.float32 and scan["point_cloud"].size == 3 * lasers.size
+    assert scan["intensity_cloud"].shape == scan["segmentation_cloud"].shape == lasers.shape
+    assert scan["segmentation_cloud"].dtype == np.int32 and lasers.dtype == np.int32
+    assert (np.diff(lasers.reshape(columns, 15), axis=1) == 1).all()  # each column: channels in order
+
+
+def test_ground_returns_lie_on_the_plane_z_zero_in_world_coordinates(world, lidar_config):
+    model = LidarModel.from_config(lidar_config)
+    position, orientation = np.array([-30.0, 30.0, -6.0]), quat_from_rpy(0.1, -0.05, 1.0)
+    scan = model.scan(world, position, orientation, 0, TENTH_S)
+    ground = scan["segmentation_cloud"] == world.ground_segmentation_id
+    assert ground.sum() > 5000
+    assert np.allclose(world_points(scan, position, orientation)[ground, 2], 0.0, atol=1e-3)
+    intensity = scan["intensity_cloud"]
+    assert ((intensity >= 0) & (intensity <= 1)).all() and intensity.max() > 0.5
+
+
+def test_box_returns_lie_on_the_visible_box_face(world, lidar_config):
+    config = lidar_config | {"vertical-fov-upper-deg": 10.0, "vertical-fov-lower-deg": -10.0}
+    model = LidarModel.from_config(config)
+    position = np.array([20.0, 0.0, -5.0])  # 8 m south of BlockNorth's face x = 28
+    scan = model.scan(world, position, LEVEL, 0, TENTH_S)
+    on_block = scan["segmentation_cloud"] == world.object_named("BlockNorth").segmentation_id
+    assert on_block.sum() > 100
+    points = world_points(scan, position, LEVEL)[on_block]
+    assert np.allclose(points[:, 0], 28.0, atol=1e-3)
+    assert (np.abs(points[:, 1]) <= 4.0 + 1e-3).all()
+
+
+def test_only_returns_within_range_are_reported(world, lidar_config):
+    model = LidarModel.from_config(lidar_config | {"range": 10.0})
+    scan = model.scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S)
+    distances = np.linalg.norm(scan["point_cloud"].reshape(-1, 3), axis=1)
+    assert distances.max() <= 10.0 + 1e-4
+    assert np.bincount(scan["laser_index_cloud"], minlength=16)[1] == 0  # -6 deg reaches ground at 38 m
+
+
+def test_azimuth_elevation_range_follows_the_frame_conventions(world, lidar_config):
+    model = LidarModel.from_config(lidar_config | {"report-azimuth-elevation-range": True})
+    scan = model.scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S)
+    aer = scan["azimuth_elevation_range_cloud"].reshape(-1, 3)
+    points = scan["point_cloud"].reshape(-1, 3)
+    rng = np.linalg.norm(points, axis=1)
+    assert np.allclose(aer[:, 2], rng, rtol=1e-5)
+    assert np.allclose(np.sin(aer[:, 0]), np.sin(np.arctan2(points[:, 1], points[:, 0])), atol=1e-4)
+    assert np.allclose(aer[:, 1], np.arcsin(-points[:, 2] / rng), atol=1e-4)
+    elevations = np.degrees(np.unique(aer[:, 1]))
+    assert np.allclose(np.sort(elevations), np.sort(np.linspace(0, -90, 16)[1:]), atol=1e-4)
+
+
+def test_azimuth_is_state_so_two_half_scans_continue_one_another(world, lidar_config):
+    config = lidar_config | {"report-azimuth-elevation-range": True}
+    whole = LidarModel.from_config(config).scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S)
+    model = LidarModel.from_config(config)
+    first = model.scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S // 2)
+    assert model.azimuth_deg == pytest.approx(180.0)
+    second = model.scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, TENTH_S // 2, TENTH_S)
+    joined = np.concatenate([first["azimuth_elevation_range_cloud"], second["azimuth_elevation_range_cloud"]])
+    assert np.allclose(joined, whole["azimuth_elevation_range_cloud"], atol=1e-5)
+    azimuths = np.degrees(first["azimuth_elevation_range_cloud"].reshape(-1, 3)[:, 0]) % 360
+    assert azimuths.max() <= 180.0 + 1e-3
+
+
+def test_a_fraction_of_a_column_is_carried_to_the_next_scan(world):
+    model = LidarModel.from_config(
+        {
+            "number-of-channels": 1,
+            "points-per-second": 500,
+            "vertical-fov-upper-deg": -45,
+            "vertical-fov-lower-deg": -45,
+        }
+    )
+    position = np.array([-40.0, 40.0, -4.0])
+    sizes = [
+        model.scan(world, position, LEVEL, t, t + 1_000_000)["laser_index_cloud"].size
+        for t in range(0, 4_000_000, 1_000_000)
+    ]
+    assert sizes == [0, 1, 0, 1]  # half a column per millisecond
+
+
+def test_the_horizontal_field_of_view_limits_the_azimuths(world, lidar_config):
+    config = lidar_config | {"horizontal-fov-start-deg": 0.0, "horizontal-fov-end-deg": 90.0}
+    config["report-azimuth-elevation-range"] = True
+    scan = LidarModel.from_config(config).scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S)
+    azimuths = np.degrees(scan["azimuth_elevation_range_cloud"].reshape(-1, 3)[:, 0])
+    assert azimuths.size > 0 and azimuths.min() >= 0.0 and azimuths.max() <= 90.0 + 1e-6
+    points = scan["point_cloud"].reshape(-1, 3)
+    assert (points[:, 0] >= -1e-3).all() and (points[:, 1] >= -1e-3).all()  # forward-right quadrant
+
+
+def test_no_time_elapsed_gives_an_empty_scan(world, lidar_config):
+    scan = LidarModel.from_config(lidar_config).scan(world, np.array([0.0, 0.0, -4.0]), LEVEL, 5, 5)
+    assert all(v.size == 0 for v in scan.values())
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ({"number-of-channels": 0}, "lidar 'lidar1': 'number-of-channels' must be an integer >= 1, got 0"),
+        ({"range": 0}, "lidar 'lidar1': 'range' must be greater than 0, got 0"),
+        (
+            {"points-per-second": "many"},
+            "lidar 'lidar1': 'points-per-second' must be a finite number, got 'many'",
+        ),
+        (
+            {"vertical-fov-upper-deg": -20.0, "vertical-fov-lower-deg": 10.0},
+            "lidar 'lidar1': 'vertical-fov-lower-deg' (10) is above 'vertical-fov-upper-deg' (-20)",
+        ),
+        (
+            {"horizontal-fov-start-deg": 90.0, "horizontal-fov-end-deg": 90.0},
+            "lidar 'lidar1': 'horizontal-fov-end-deg' (90) must be greater than 'horizontal-fov-start-deg' (90)",
+        ),
+    ],
+)
+def test_invalid_lidar_configs_are_refused_naming_sensor_and_key(lidar_config, override, message):
+    with pytest.raises(LidarError) as caught:
+        LidarModel.from_config(lidar_config | override)
+    assert str(caught.value) == message
+
+
+def test_the_mount_orientation_is_read_from_the_origin(lidar_config):
+    model = LidarModel.from_config(lidar_config | {"origin": {"xyz": "0 0 0", "rpy-deg": "0 0 90"}})
+    assert np.allclose(model.mount_orientation, quat_from_rpy(0, 0, math.pi / 2))

@@ -1,0 +1,264 @@
+"""Scene parsing and the topic table the real server would register (protocol.md §4, §6)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from harness import SIM_CONFIG
+from projectairsim.utils import load_scene_config_as_dict
+
+from airsim_mapper.simserver.scene import (
+    SceneError,
+    default_scene,
+    geo_to_ned,
+    info_topic_path,
+    ned_to_geo,
+    parse_scene,
+    topic_table,
+)
+from simserver.expected_topics import EXPECTED
+
+
+def merged_scene(name: str) -> str:
+    """The JSON string the real client sends with LoadScene (robot configs inlined by the client itself)."""
+    config, _ = load_scene_config_as_dict(name, sim_config_path=str(SIM_CONFIG))
+    return json.dumps(config)
+
+
+def minimal(**overrides) -> dict:
+    robot_config = {"physics-type": "non-physics", "sensors": []}
+    actor = {
+        "type": "robot",
+        "name": "D",
+        "origin": {"xyz": "1 2 -3", "rpy-deg": "0 0 90"},
+        "robot-config": robot_config,
+    }
+    scene = {"id": "S", "actors": [actor], "clock": {"type": "steppable"}}
+    scene.update(overrides)
+    return scene
+
+
+@pytest.mark.parametrize("scene_file", sorted(EXPECTED))
+def test_each_shared_scene_registers_exactly_the_documented_topics(scene_file):
+    scene_id, expected = EXPECTED[scene_file]
+    spec = parse_scene(merged_scene(scene_file))
+    assert spec.id == scene_id
+    paths = [row.path for row in topic_table(spec)]
+    assert paths == sorted(paths)
+    assert set(paths) == expected | {"/$topics"}
+
+
+def test_topic_rows_carry_the_real_type_message_type_and_frequency():
+    rows = {row.path: row for row in topic_table(parse_scene(merged_scene("scene_drone_sensors.jsonc")))}
+    base = "/Sim/SceneDroneSensors/robots/Drone1"
+    assert rows["/$topics"].message_type == "topic-list"
+    assert (rows[f"{base}/desired_pose"].type, rows[f"{base}/desired_pose"].message_type) == (
+        "subscribed",
+        "",
+    )
+    assert rows[f"{base}/actual_pose"].message_type == ""
+    assert rows[f"{base}/collision_info"].message_type == "collision-info"
+    assert (
+        rows[f"{base}/sensors/DownCamera/scene_camera"].message_type,
+        rows[f"{base}/sensors/DownCamera/scene_camera"].frequency,
+    ) == ("image", 60)
+    assert rows[f"{base}/sensors/DownCamera/scene_camera_info"].message_type == "camera-info"
+    assert rows[f"{base}/sensors/DownCamera/disparity_normalized_camera"].message_type == "image"
+    assert rows[f"{base}/sensors/IMU1/imu_kinematics"].message_type == "imu"
+    assert rows[f"{base}/sensors/GPS/gps"].message_type == ""
+    assert rows[f"{base}/sensors/lidar1/lidar"].message_type == "lidar"
+    assert rows[f"{base}/sensors/DistanceSensor/distance_sensor"].message_type == "distance-sensor"
+
+
+def test_disparity_camera_info_is_published_on_the_image_topic_itself():
+    assert info_topic_path("/p", 5) == "/p/disparity_normalized_camera"
+    assert info_topic_path("/p", 0) == "/p/scene_camera_info"
+
+
+def test_robot_origin_clock_and_home_are_read():
+    spec = parse_scene(
+        json.dumps(minimal(clock={"type": "real-time", "step-ns": 1000, "pause-on-start": True}))
+    )
+    robot = spec.robots[0]
+    assert robot.position.tolist() == [1.0, 2.0, -3.0]
+    assert robot.orientation == pytest.approx([0.7071068, 0, 0, 0.7071068])
+    assert (spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start) == ("real-time", 1000, True)
+    assert spec.home_geo == (47.641468, -122.140165, 122.0)
+
+
+def test_geo_point_origins_become_ned_offsets_from_home():
+    home = (47.0, -122.0, 100.0)
+    ned = geo_to_ned((47.001, -122.0, 110.0), home)
+    assert (
+        ned[0] == pytest.approx(111.3, abs=0.1)
+        and ned[1] == pytest.approx(0.0)
+        and ned[2] == pytest.approx(-10.0)
+    )
+    assert ned_to_geo(ned, home) == pytest.approx((47.001, -122.0, 110.0))
+    scene = minimal(**{"home-geo-point": {"latitude": 47.0, "longitude": -122.0, "altitude": 100.0}})
+    scene["actors"][0]["origin"] = {"geo-point": "47.001 -122.0 110.0", "rpy-deg": "0 0 0"}
+    assert parse_scene(json.dumps(scene)).robots[0].position[2] == pytest.approx(-10.0)
+
+
+def test_disabled_sensors_and_capture_disabled_images_have_no_topics():
+    scene = minimal()
+    scene["actors"][0]["robot-config"]["sensors"] = [
+        {"id": "G", "type": "gps", "enabled": False},
+        {
+            "id": "C",
+            "type": "camera",
+            "enabled": True,
+            "capture-settings": [
+                {"image-type": 1, "capture-enabled": False},
+                {"image-type": 3, "capture-enabled": True},
+            ],
+        },
+    ]
+    paths = {row.path for row in topic_table(parse_scene(json.dumps(scene)))}
+    assert "/Sim/S/robots/D/sensors/C/segmentation_camera" in paths
+    assert not any("/G/" in p or "depth_planar" in p for p in paths)
+
+
+def test_the_default_scene_is_scene_basic_drone_with_one_drone():
+    spec = default_scene()
+    assert spec.prefix == "/Sim/SceneBasicDrone"
+    assert [r.name for r in spec.robots] == ["Drone1"] and spec.robots[0].multirotor
+
+
+def bad(mutate) -> str:
+    scene = minimal()
+    mutate(scene)
+    return json.dumps(scene)
+
+
+def set_sensor(scene: dict, sensor: dict) -> None:
+    scene["actors"][0]["robot-config"]["sensors"] = [sensor]
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("{not json", "scene_config is not valid JSON"),
+        ("[1]", "scene_config must be a JSON object, got list"),
+        (json.dumps({"actors": []}), "scene config has no 'id'"),
+        (json.dumps({"id": "a/b"}), "scene 'id' must be a non-empty string without '/'"),
+        (json.dumps({"id": "S", "actors": {}}), "scene 'actors' must be a list"),
+        (json.dumps({"id": "S", "actors": [3]}), "actor #0 must be an object"),
+        (bad(lambda s: s["actors"][0].pop("name")), "actor #0 has no 'name'"),
+        (bad(lambda s: s["actors"][0].pop("origin")), "robot 'D' has no 'origin'"),
+        (
+            bad(lambda s: s["actors"][0].update({"robot-config": "robot.jsonc"})),
+            "'robot-config' must be the inlined",
+        ),
+        (
+            bad(lambda s: s["actors"][0].update({"origin": {"xyz": "1 2"}})),
+            "robot 'D': origin 'xyz' must hold three",
+        ),
+        (
+            bad(lambda s: s["actors"][0].update({"origin": {"geo-point": "1 2"}})),
+            "'geo-point' must hold three numbers",
+        ),
+        (bad(lambda s: s["actors"][0].update({"origin": 5})), "robot 'D' origin must be an object"),
+        (bad(lambda s: s["actors"].append(dict(s["actors"][0]))), "duplicate robot names: D"),
+        (
+            bad(lambda s: s.update(clock={"type": "engine-driven"})),
+            "clock type 'engine-driven' is not supported",
+        ),
+        (bad(lambda s: s.update(clock={"type": "steppable", "step-ns": 0})), "'step-ns' must be positive"),
+        (bad(lambda s: s.update(clock=[])), "scene 'clock' must be an object"),
+        (
+            bad(lambda s: s.update({"home-geo-point": {"latitude": "x"}})),
+            "'latitude' must be a finite number",
+        ),
+        (bad(lambda s: s.update({"home-geo-point": 3})), "'home-geo-point' must be an object"),
+        (
+            bad(lambda s: s["actors"][0]["robot-config"].update(sensors={})),
+            "robot 'D' 'sensors' must be a list",
+        ),
+        (
+            bad(lambda s: set_sensor(s, {"id": "X", "type": "sonar", "enabled": True})),
+            "sensor 'X' has unknown type 'sonar'",
+        ),
+        (bad(lambda s: set_sensor(s, {"type": "gps"})), "robot 'D' sensor has no 'id'"),
+        (bad(lambda s: set_sensor(s, 4)), "robot 'D' sensor must be an object"),
+        (
+            bad(
+                lambda s: s["actors"][0]["robot-config"].update(
+                    sensors=[{"id": "I", "type": "imu", "enabled": True}] * 2
+                )
+            ),
+            "duplicate sensor ids: I",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s, {"id": "C", "type": "camera", "enabled": True, "capture-settings": [{"image-type": 9}]}
+                )
+            ),
+            r"invalid 'image-type' 9 \(expected 0..6\)",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s, {"id": "C", "type": "camera", "enabled": True, "capture-settings": {}}
+                )
+            ),
+            "'capture-settings' must be a list",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s, {"id": "C", "type": "camera", "enabled": True, "capture-settings": [7]}
+                )
+            ),
+            "capture setting must be an object",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s,
+                    {
+                        "id": "C",
+                        "type": "camera",
+                        "enabled": True,
+                        "capture-settings": [{"image-type": 0, "width": 0}],
+                    },
+                )
+            ),
+            "must have a positive width and height, got 0x144",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s,
+                    {
+                        "id": "C",
+                        "type": "camera",
+                        "enabled": True,
+                        "capture-settings": [{"image-type": 0, "fov-degrees": 180}],
+                    },
+                )
+            ),
+            r"'fov-degrees' must be in \(0, 180\), got 180",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(s, {"id": "C", "type": "camera", "enabled": True, "capture-interval": 0})
+            ),
+            "'capture-interval' must be positive, got 0",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s, {"id": "C", "type": "camera", "enabled": True, "capture-interval": "x"}
+                )
+            ),
+            "'capture-interval' must be a finite number, got 'x'",
+        ),
+        (bad(lambda s: s["actors"][0].update(name="")), "actor #0 'name' must be a non-empty string"),
+    ],
+)
+def test_invalid_scenes_are_rejected_with_a_message_saying_what_is_wrong(text, message):
+    with pytest.raises(SceneError, match=message):
+        parse_scene(text)
