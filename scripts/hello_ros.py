@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import contextlib
 import logging
+import signal
 import sys
 import time
 from pathlib import Path
@@ -56,10 +56,14 @@ async def mission(drone, target: tuple[float, float, float], speed: float) -> No
             log.info("reached (%.1f, %.1f, %.1f) [leg %d]", x, y, z, legs)
 
 
-async def main(drone, args: argparse.Namespace) -> None:
+async def main(client, bridge, drone, args: argparse.Namespace) -> None:
+    """Run the mission until ROS shuts down (Ctrl-C) or --seconds pass; then stop everything."""
     import rospy
 
     target = tuple(float(v) for v in args.target.split())
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):  # Ctrl-C ends the mission and ROS together
+        loop.add_signal_handler(sig, rospy.signal_shutdown, f"signal {sig.name}")
     task = asyncio.create_task(mission(drone, target, args.speed))
     deadline = time.monotonic() + args.seconds if args.seconds > 0 else None
     while not rospy.is_shutdown() and not task.done():
@@ -68,8 +72,10 @@ async def main(drone, args: argparse.Namespace) -> None:
             break
         await asyncio.sleep(0.2)  # yield to the mission between checks
     task.cancel()
-    with contextlib.suppress(asyncio.CancelledError):
-        await task
+    bridge.shutdown()
+    # Closing the client's sockets ends the mission's pending request, so the cancelled task can finish.
+    client.disconnect()
+    await asyncio.wait({task}, timeout=5)
 
 
 def run(argv: list[str]) -> int:
@@ -88,10 +94,10 @@ def run(argv: list[str]) -> int:
         bridge = ProjectAirSimWrapper(client, sim_config_path=args.simconfigpath, mapping=args.mapping)
         bridge.update_topics(world)
         drone = Drone(client, world, args.robot)
-        asyncio.run(main(drone, args))
-        bridge.shutdown()
-    finally:
+    except BaseException:
         client.disconnect()
+        raise
+    asyncio.run(main(client, bridge, drone, args))
     return 0
 
 

@@ -72,8 +72,13 @@ class Process:
             try:
                 self.popen.wait(timeout=timeout)
             except subprocess.TimeoutExpired:
-                _signal_group(self.popen.pid, signal.SIGKILL)
-                self.popen.wait(timeout=5)
+                # Python children run with -X faulthandler: SIGABRT dumps every thread's stack to the log.
+                _signal_group(self.popen.pid, signal.SIGABRT)
+                try:
+                    self.popen.wait(timeout=3)
+                except subprocess.TimeoutExpired:
+                    _signal_group(self.popen.pid, signal.SIGKILL)
+                    self.popen.wait(timeout=5)
         # Children that outlived the leader still belong to the group.
         _signal_group(self.popen.pid, signal.SIGKILL)
         return self.popen.returncode
@@ -115,7 +120,7 @@ class Launcher:
 
     def python(self, name: str, script_and_args: Sequence[str], **kwargs) -> Process:
         """Run a Python script or `-m module` with the venv's interpreter."""
-        return self.start(name, [sys.executable, "-u", *script_and_args], **kwargs)
+        return self.start(name, [sys.executable, "-u", "-X", "faulthandler", *script_and_args], **kwargs)
 
     def stop_all(self) -> None:
         for proc in reversed(self.processes):

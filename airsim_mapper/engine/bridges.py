@@ -161,8 +161,13 @@ class SimToRos(Bridge):
         if out is None:
             return None
         self._last_publish = now
+        if self._stopped:  # stopped while this message was being converted
+            return None
         if self.publisher is not None:
-            self.publisher.publish(out)
+            try:
+                self.publisher.publish(out)
+            except rospy.ROSException:  # unregistered by a concurrent stop
+                return None
         self.stats.messages += 1
         self.stats.last_time = now
         header = getattr(out, "header", None)

@@ -23,6 +23,12 @@ def schema() -> dict[str, Any]:
     return json.loads(SCHEMA_PATH.read_text(encoding="utf-8"))
 
 
+@cache
+def validator() -> jsonschema.Draft202012Validator:
+    """A validator for the mapping schema, built once."""
+    return jsonschema.Draft202012Validator(schema())
+
+
 def did_you_mean(word: str, choices: Any) -> str:
     """` (did you mean 'x'?)` for the closest choice, or '' when none is close."""
     close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.8)
@@ -79,9 +85,8 @@ def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Itera
 
 def schema_problems(data: Any, marks: Marks, file: str) -> list[tuple[tuple[Any, ...], Problem]]:
     """Every schema violation of `data` with its path, located at its key or value in the file."""
-    validator = jsonschema.Draft202012Validator(schema())
     problems = []
-    for err in validator.iter_errors(data):
+    for err in validator().iter_errors(data):
         for path, message in _messages(err, data, marks):
             line, col = marks.key(path) if err.validator == "additionalProperties" else marks.value(path)
             problems.append((path, Problem(file, line, col, message)))

@@ -4,11 +4,14 @@ The camera looks along its body +x (FRD: x forward, y right, z down). Pixel (u, 
 origin) looks along (1, (u - w/2)/f, (v - h/2)/f) with f = (w/2)/tan(fov/2), the pinhole model that
 `camera_info_message` publishes, so projecting a point with K lands on the pixel that sees it.
 
-Image types (Project AirSim numbering): 0 scene (BGR, Lambert-shaded object colours, checkered ground,
-sky), 1 depth planar and 2 depth perspective (16FC1, float16 metres, +inf where nothing is hit),
-3 segmentation (BGR colour of the segmentation id, black for sky), 4 depth vis (BGR grey, perspective depth
-/ max depth, white beyond), 5 disparity normalized (BGR grey, 1 m / planar depth clipped to 1, black sky),
-6 surface normals (BGR of the world NED normal mapped from [-1, 1] to [0, 255] as R=x, G=y, B=z; black sky).
+Image types (Project AirSim numbering):
+0 scene: BGR; object colours shaded by a fixed sun (Lambert plus ambient), the ground checkered in 2 m
+  squares, distant surfaces hazed towards the sky colour.
+1 depth planar, 2 depth perspective: 16FC1 (float16 metres), +inf where nothing is hit.
+3 segmentation: BGR colour of the segmentation id (`segmentation_color`), black for the sky.
+4 depth vis: BGR grey, perspective depth / max depth (white at and beyond it).
+5 disparity normalized: BGR grey, 1 m / planar depth clipped to 1, black sky.
+6 surface normals: BGR of the world NED normal mapped from [-1, 1] to [0, 255] as R=x, G=y, B=z; black sky.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
-from airsim_mapper.simserver.world import GROUND_INDEX, MISS_INDEX, World
+from airsim_mapper.simserver.world import World
 
 SCENE, DEPTH_PLANAR, DEPTH_PERSPECTIVE, SEGMENTATION, DEPTH_VIS, DISPARITY_NORMALIZED, SURFACE_NORMALS = (
     range(7)
@@ -30,9 +33,8 @@ IMAGE_TYPES = tuple(range(7))
 DEPTH_TYPES = (DEPTH_PLANAR, DEPTH_PERSPECTIVE)
 DEFAULT_MAX_DISTANCE = 10000.0  # metres a camera ray travels before it counts as sky
 DEFAULT_MAX_DEPTH_VIS = 100.0  # metres that map to white in depth vis (capture setting max-depth-meters)
-SUN_DIRECTION = np.array(
-    [-0.3, 0.4, -0.866], dtype=np.float32
-)  # towards the sun, world NED (high, south-east)
+# towards the sun, world NED: high in the south-east
+SUN_DIRECTION = np.array([-0.3, 0.4, -0.866], dtype=np.float32)
 _AMBIENT = np.float32(0.35)
 _FOG_DISTANCE = np.float32(1500.0)
 
@@ -97,6 +99,14 @@ def segmentation_palette() -> np.ndarray:
     return palette
 
 
+@lru_cache(maxsize=1)
+def _palette_rows() -> np.ndarray:
+    """(3, 256) B, G, R rows of the segmentation palette."""
+    rows = np.ascontiguousarray(segmentation_palette().T)
+    rows.flags.writeable = False
+    return rows
+
+
 def segmentation_color(segmentation_id: int) -> tuple[int, int, int]:
     """BGR colour used for one segmentation id in segmentation images."""
     return tuple(int(c) for c in segmentation_palette()[int(segmentation_id) % 256])
@@ -112,42 +122,65 @@ def _check_request(width: int, height: int, fov_deg: float, image_types: Sequenc
         raise CameraError(f"unknown image type {unknown[0]!r} (expected 0-6)")
 
 
-def _bgr(channels: np.ndarray, width: int, height: int) -> RenderedImage:
-    """Image from (3, N) channel rows (B, G, R) of values already in 0-255."""
-    pixels = np.empty((channels.shape[1], 3), dtype=np.uint8)
+def _bgr(channels, width: int, height: int) -> RenderedImage:
+    """Image from three channel rows (B, G, R) of N values in 0-255 (cast to uint8, truncating)."""
+    pixels = np.empty((width * height, 3), dtype=np.uint8)
     for c in range(3):
         pixels[:, c] = channels[c]
     return RenderedImage("BGR", width, height, pixels.tobytes())
 
 
-def _gray(values: np.ndarray, width: int, height: int) -> RenderedImage:
-    level = (np.clip(values, 0.0, 1.0) * np.float32(255.0) + np.float32(0.5)).astype(np.uint8)
-    return RenderedImage("BGR", width, height, np.repeat(level, 3).tobytes())
+def _gray(level: np.ndarray, width: int, height: int) -> RenderedImage:
+    """Grey BGR image from N levels in 0-255 (values above 255 must not occur)."""
+    gray = level.astype(np.uint8)
+    return _bgr((gray, gray, gray), width, height)
+
+
+def _sphere_pixels(hits) -> np.ndarray:
+    return np.nonzero(hits.face < 0)[0]
 
 
 def _scene(world: World, position: np.ndarray, dirs: np.ndarray, hits) -> np.ndarray:
-    """Shaded colours as (3, N) float32 B, G, R rows."""
-    index = hits.object_index
-    colors = world.colors_of(index)  # (3, N)
-    normal = hits.normal.T  # (3, N)
+    """Shaded colours as (3, N) float32 B, G, R rows in 0-255."""
+    normals, colors = world.face_table
     sun = SUN_DIRECTION / np.linalg.norm(SUN_DIRECTION)
-    lambert = np.clip(sun[0] * normal[0] + sun[1] * normal[1] + sun[2] * normal[2], 0.0, 1.0)
-    light = _AMBIENT + (np.float32(1.0) - _AMBIENT) * lambert
-    ground = index == GROUND_INDEX
+    one = np.float32(1.0)
+    light = _AMBIENT + (one - _AMBIENT) * np.clip(sun @ normals, 0.0, 1.0)  # flat faces: one value each
+    shade = (colors * light).astype(np.float32)
+    slots = np.maximum(hits.face, 0).astype(np.intp)
+    out = np.empty((3, slots.size), dtype=np.float32)
+    for c in range(3):
+        np.take(shade[c], slots, out=out[c], mode="clip")
+    curved = _sphere_pixels(hits)
+    if curved.size:  # spheres: Lambert per pixel
+        lambert = np.clip(hits.normal[curved] @ sun, 0.0, 1.0)
+        base = world.colors_of(hits.object_index[curved])
+        out[:, curved] = base * (_AMBIENT + (one - _AMBIENT) * lambert)
+    # 2 m checker on the ground, and haze towards the sky colour with distance (misses are all sky)
+    distance = np.minimum(hits.distance, np.float32(1e30))
     with np.errstate(invalid="ignore"):
-        px = position[0] + dirs[0] * hits.distance
-        py = position[1] + dirs[1] * hits.distance
-    cells = np.floor(np.where(ground, px, 0.0) / 2.0) + np.floor(np.where(ground, py, 0.0) / 2.0)
-    light *= np.where(ground & (cells % 2 == 1), np.float32(0.85), np.float32(1.0))
-    # haze towards the sky colour with distance; the sky itself brightens towards the horizon
-    hit = index != MISS_INDEX
-    haze = np.where(hit, -np.expm1(-np.where(hit, hits.distance, 0.0) / _FOG_DISTANCE), np.float32(1.0))
-    horizon = np.clip(np.float32(1.0) + dirs[2], 0.0, 1.0) * np.float32(0.25)
-    keep = (np.float32(1.0) - haze) * light
-    out = np.empty(colors.shape, dtype=np.float32)
-    for channel, sky in enumerate(world.sky_color_bgr):
-        sky_px = np.float32(sky) + (np.float32(255.0 - sky)) * horizon
-        out[channel] = colors[channel] * keep + sky_px * haze
+        cell_x = np.floor(position[0] * np.float32(0.5) + dirs[0] * (distance * np.float32(0.5)))
+        cell_y = np.floor(position[1] * np.float32(0.5) + dirs[1] * (distance * np.float32(0.5)))
+        odd = ((cell_x + cell_y).astype(np.int64) & 1).astype(bool) & (hits.face == 1)
+    haze = distance / (distance + _FOG_DISTANCE)
+    keep = (one - haze) * np.where(odd, np.float32(0.85), one)
+    for c, sky in enumerate(world.sky_color_bgr):
+        out[c] *= keep
+        out[c] += np.float32(sky) * haze
+    return out
+
+
+def _normal_colors(world: World, hits) -> np.ndarray:
+    """(3, N) B, G, R rows encoding the world normal (x -> R, y -> G, z -> B); black where nothing is hit."""
+    normals, _ = world.face_table
+    lut = np.where(np.arange(normals.shape[1]) > 0, (normals[::-1] + 1.0) * 127.5 + 0.5, 0.0).astype(np.uint8)
+    slots = np.maximum(hits.face, 0).astype(np.intp)
+    out = np.empty((3, slots.size), dtype=np.uint8)
+    for c in range(3):
+        np.take(lut[c], slots, out=out[c], mode="clip")
+    curved = _sphere_pixels(hits)
+    if curved.size:
+        out[:, curved] = ((hits.normal[curved].T[::-1] + 1.0) * 127.5 + 0.5).astype(np.uint8)
     return out
 
 
@@ -177,22 +210,21 @@ def render(
     out: dict[int, RenderedImage] = {}
     for kind in types:
         if kind == SCENE:
-            out[kind] = _bgr(np.clip(_scene(world, origin, dirs, hits), 0.0, 255.0) + 0.5, width, height)
+            out[kind] = _bgr(_scene(world, origin, dirs, hits), width, height)
         elif kind in DEPTH_TYPES:
             depth = planar if kind == DEPTH_PLANAR else perspective
             out[kind] = RenderedImage("16FC1", width, height, depth.astype("<f2").tobytes())
         elif kind == SEGMENTATION:
-            palette = segmentation_palette().T  # (3, 256)
-            out[kind] = _bgr(np.take(palette, hits.segmentation_id % 256, axis=1), width, height)
-        elif kind == DEPTH_VIS:
-            out[kind] = _gray(perspective / np.float32(max_depth_vis), width, height)
-        elif kind == DISPARITY_NORMALIZED:
+            ids = (hits.segmentation_id & 255).astype(np.intp)
+            palette = _palette_rows()
+            out[kind] = _bgr([np.take(palette[c], ids, mode="clip") for c in range(3)], width, height)
+        elif kind == DEPTH_VIS:  # 0 at the camera, 255 at max depth and beyond
+            level = np.minimum(perspective * np.float32(255.0 / max_depth_vis) + np.float32(0.5), 255.0)
+            out[kind] = _gray(level, width, height)
+        elif kind == DISPARITY_NORMALIZED:  # 1 m / planar depth: 255 up to 1 m, 0 for the sky
             with np.errstate(divide="ignore"):
-                out[kind] = _gray(np.float32(1.0) / np.maximum(planar, np.float32(1e-6)), width, height)
-        else:  # SURFACE_NORMALS: B = z, G = y, R = x
-            normal = hits.normal.T[::-1]
-            encoded = np.where(
-                hits.hit, (normal + np.float32(1.0)) * np.float32(127.5) + np.float32(0.5), 0.0
-            )
-            out[kind] = _bgr(encoded, width, height)
+                level = np.minimum(np.float32(255.0) / planar + np.float32(0.5), 255.0)
+            out[kind] = _gray(level, width, height)
+        else:  # SURFACE_NORMALS
+            out[kind] = _bgr(_normal_colors(world, hits), width, height)
     return out

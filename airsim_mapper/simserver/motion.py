@@ -19,10 +19,10 @@ from airsim_mapper.geometry import quat_from_rpy, quat_multiply, quat_normalize,
 TAKEOFF_HEIGHT_M = 3.0
 TAKEOFF_SPEED = 3.0
 LAND_SPEED = 2.5
-VERTICAL_GAIN = 2.0
+VERTICAL_GAIN = 5.0
 MAX_VERTICAL_SPEED = 5.0
 MAX_YAW_RATE = math.pi
-ARRIVAL_M = 0.02
+ARRIVAL_M = 1e-6
 LANDED_HEIGHT_M = 0.15
 FORWARD_ONLY = 1
 
@@ -94,11 +94,13 @@ class Command:
     """A motion command; subclasses implement `motion`. `wait` blocks the service worker until it ends."""
 
     name = "Command"
+    duration = math.inf  # sim seconds of motion for time-boxed commands
 
     def __init__(self, timeout_s: float = math.inf) -> None:
         self.elapsed = 0.0
         self.timeout_s = timeout_s
         self.result: bool | None = None
+        self.start_ns: int | None = None  # sim time the command was received; set by Body.run
         self._done = threading.Event()
 
     def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
@@ -235,8 +237,12 @@ class Body:
 
     # -- commands
 
-    def run(self, command: Command) -> Command:
-        """Make `command` the active one; the previous one (if running) completes with False."""
+    def run(self, command: Command, now_ns: int | None = None) -> Command:
+        """Make `command` the active one; the previous one (if running) completes with False.
+
+        `now_ns` is the sim time the command arrived: sim time before it is not spent on it.
+        """
+        command.start_ns = now_ns
         with self.lock:
             previous, self.active = self.active, command
         if previous is not None:
@@ -283,15 +289,25 @@ class Body:
 
     # -- integration
 
-    def tick(self, dt: float, blocked: Callable[[np.ndarray, np.ndarray], bool] | None = None) -> None:
-        """Advance by `dt` sim seconds; `blocked(old, new)` may veto a move into an obstacle."""
+    def tick(
+        self,
+        dt: float,
+        blocked: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+        now_ns: int | None = None,
+    ) -> None:
+        """Advance by `dt` sim seconds (ending at `now_ns`); `blocked(old, new)` may veto a move."""
         if dt <= 0:
             return
         with self.lock:
             state = self.state
             command = self.active
+            if command is not None and command.start_ns is not None and now_ns is not None:
+                dt = min(dt, (now_ns - command.start_ns) / 1e9)
+                if dt <= 0:
+                    return
             ground_z = self.ground(state.position)
             motion = None
+            step = dt  # the part of this tick the command's motion lasts
             if command is not None:
                 if command.elapsed >= command.timeout_s:
                     self.active = None
@@ -299,13 +315,14 @@ class Body:
                     command = None
                 else:
                     motion = command.motion(state, dt, ground_z)
+                    step = min(dt, max(0.0, command.duration - command.elapsed))
                     command.elapsed += dt
                     if motion is None:
                         self.active = None
                         command.finish(True)
             velocity = motion.velocity if motion is not None else np.zeros(3)
             yaw_rate = motion.yaw_rate if motion is not None else 0.0
-            new_position = state.position + velocity * dt
+            new_position = state.position + velocity * step
             new_position[2] = min(new_position[2], self.ground(new_position))
             if blocked is not None and blocked(state.position, new_position):
                 new_position = state.position.copy()
@@ -318,7 +335,7 @@ class Body:
             state.position = new_position
             if yaw_rate:
                 state.orientation = quat_normalize(
-                    quat_multiply(quat_from_rpy(0.0, 0.0, yaw_rate * dt), state.orientation)
+                    quat_multiply(quat_from_rpy(0.0, 0.0, yaw_rate * step), state.orientation)
                 )
 
 

@@ -79,11 +79,10 @@ def _map_header(n: int) -> bytes:
 
 def _typed_array(values: np.ndarray, marker: int, dtype: str) -> Raw:
     """An msgpack array whose every element is `marker` followed by the big-endian value."""
-    flat = np.ascontiguousarray(values, dtype=dtype).reshape(-1)
-    width = flat.dtype.itemsize
-    cells = np.empty((flat.size, width + 1), dtype=np.uint8)
-    cells[:, 0] = marker
-    cells[:, 1:] = flat.view(np.uint8).reshape(flat.size, width)
+    flat = np.asarray(values).reshape(-1)
+    cells = np.empty(flat.size, dtype=np.dtype([("marker", "u1"), ("value", dtype)]))
+    cells["marker"] = marker
+    cells["value"] = flat
     return Raw(_array_header(flat.size) + cells.tobytes())
 
 
@@ -104,14 +103,12 @@ def uint8_list(data: bytes | np.ndarray) -> Raw:
     """
     values = np.frombuffer(data, dtype=np.uint8) if isinstance(data, (bytes, bytearray)) else data
     values = np.ascontiguousarray(values, dtype=np.uint8).reshape(-1)
-    pairs = np.empty((values.size, 2), dtype=np.uint8)
     large = values >= 0x80
-    pairs[:, 0] = np.where(large, 0xCC, values)
-    pairs[:, 1] = values
-    keep = np.empty((values.size, 2), dtype=bool)
-    keep[:, 0] = True
-    keep[:, 1] = large
-    return Raw(_array_header(values.size) + pairs[keep].tobytes())
+    where = np.arange(values.size) + np.cumsum(large)  # output index of each value byte
+    out = np.empty(values.size + int(np.count_nonzero(large)), dtype=np.uint8)
+    out[where] = values
+    out[where[large] - 1] = 0xCC
+    return Raw(_array_header(values.size) + out.tobytes())
 
 
 def _numpy_array(array: np.ndarray) -> Raw:

@@ -39,9 +39,11 @@ from airsim_mapper.simserver.streams import (
     RotorStream,
 )
 from airsim_mapper.simserver.topics import TopicHub
+from airsim_mapper.simserver.world import World
 
 COLLISION_RADIUS_M = 0.4
 COLLISION_REPEAT_NS = 100_000_000
+GROUND_PROBE_M = 0.1  # ground rays start this far above the body, so a body resting on a surface sees it
 MOVE_PARAMS = ("duration", "drivetrain", "yaw_is_rate", "yaw")
 PATH_PARAMS = (
     "velocity",
@@ -73,7 +75,9 @@ def _yaw_mode(params: dict[str, Any]) -> YawMode:
 class RobotRuntime:
     """A robot of the running scene."""
 
-    def __init__(self, scene: SceneSpec, spec: RobotSpec, world: Any, hub: TopicHub, clock: SimClock) -> None:
+    def __init__(
+        self, scene: SceneSpec, spec: RobotSpec, world: World, hub: TopicHub, clock: SimClock
+    ) -> None:
         self.scene, self.spec, self.world, self.hub, self.clock = scene, spec, world, hub, clock
         self.prefix = scene.robot_prefix(spec.name)
         self.body = Body(spec.position, spec.orientation, self.ground_z)
@@ -106,16 +110,13 @@ class RobotRuntime:
 
     def ground_z(self, position: np.ndarray) -> float:
         """z of the first surface straight below `position` (the ground plane if the world misses)."""
-        if self.world is None:
-            return 0.0
-        hits = self.world.raycast(np.asarray(position, dtype=float), np.array([[0.0, 0.0, 1.0]]), 1000.0)
+        origin = np.asarray(position, dtype=float) - np.array([0.0, 0.0, GROUND_PROBE_M])
+        hits = self.world.raycast(origin, np.array([[0.0, 0.0, 1.0]]), 1000.0)
         distance = float(hits.distance[0])
-        return float(position[2]) + distance if math.isfinite(distance) else 0.0
+        return float(origin[2]) + distance if math.isfinite(distance) else 0.0
 
     def _blocked(self, old: np.ndarray, new: np.ndarray) -> bool:
         """Veto a move that goes deeper into an object; report the collision on collision_info."""
-        if self.world is None:
-            return False
         contact = self.world.collide_sphere(new, COLLISION_RADIUS_M)
         if contact is None:
             self.in_contact = None
@@ -134,8 +135,8 @@ class RobotRuntime:
 
     # -- ticking
 
-    def tick(self, dt_s: float) -> None:
-        self.body.tick(dt_s, self._blocked)
+    def tick(self, dt_s: float, now_ns: int) -> None:
+        self.body.tick(dt_s, self._blocked, now_ns)
 
     def publish_pose(self, now_ns: int) -> None:
         kin = self.body.snapshot()
@@ -189,14 +190,8 @@ class RobotRuntime:
             table += self._multirotor_methods()
         return table
 
-    def _getter(self, stream: InstrumentStream) -> Callable[[dict[str, Any]], Any]:
-        def get(_: dict[str, Any]) -> Any:
-            message = stream.message(self.clock.now_ns())
-            if message is None:
-                raise ServiceError(f"sensor '{stream.sensor.id}' is not available in this server build")
-            return message
-
-        return get
+    def _getter(self, stream: InstrumentStream) -> Callable[[dict[str, Any]], dict[str, Any]]:
+        return lambda _: stream.message(self.clock.now_ns())
 
     def _get_kinematics(self, _: dict[str, Any]) -> dict[str, Any]:
         return messages.kinematics(self.clock.now_ns(), self.body.snapshot())
@@ -265,7 +260,7 @@ class RobotRuntime:
             return True
 
         def look_at(params: dict[str, Any]) -> bool:
-            return self.world is not None and self.world.object_named(str(params["object_name"])) is not None
+            return self.world.object_named(str(params["object_name"])) is not None
 
         accept = lambda _: True  # noqa: E731 - settings this renderer does not model
         return [
@@ -286,7 +281,7 @@ class RobotRuntime:
     # -- multirotor
 
     def _run(self, command: Command) -> bool:
-        self.body.run(command)
+        self.body.run(command, self.clock.now_ns())
         return command.wait()
 
     def _flag(self, name: str, value: bool) -> Callable[[dict[str, Any]], bool]:

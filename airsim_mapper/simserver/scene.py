@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin, quat_from_rpy
+from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
 IMAGE_TYPE_NAMES = {
@@ -350,7 +350,3 @@ def topic_table(scene: SceneSpec) -> list[TopicInfo]:
         for sensor in robot.sensors:
             rows += sensor_topics(scene.sensor_prefix(robot.name, sensor.id), sensor)
     return sorted(rows, key=lambda row: row.path)
-
-
-def yaw_quaternion(yaw: float) -> np.ndarray:
-    return quat_from_rpy(0.0, 0.0, yaw)

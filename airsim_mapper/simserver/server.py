@@ -9,9 +9,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.simserver.scene import SceneError, default_scene, parse_scene
-from airsim_mapper.simserver.services import Method, MethodTable, ServiceError, ServiceServer
+from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
 from airsim_mapper.simserver.session import Session, TrajectoryStore
 from airsim_mapper.simserver.topics import TopicHub
+from airsim_mapper.simserver.world import load_world
 
 LOG = logging.getLogger("airsim_mapper.simserver")
 
@@ -30,18 +31,12 @@ class ServerOptions:
     workers: int = 32
 
 
-def load_world_or_none(path: str | None) -> Any:
-    from airsim_mapper.simserver import world
-
-    return world.load_world(path)
-
-
 class SimServer:
     """Owns both channels and the running scene; `start`, then `stop` (joins every thread)."""
 
     def __init__(self, options: ServerOptions) -> None:
         self.options = options
-        self.world = load_world_or_none(options.world_path)
+        self.world = load_world(options.world_path)
         self.table = MethodTable()
         self.hub = TopicHub(options.address, options.topics_port)
         self.services = ServiceServer(self.table, options.address, options.services_port, options.workers)
@@ -184,8 +179,3 @@ class SimServer:
                 self._stopping.wait(0.1)
             if not worked:
                 self._stopping.wait(0.002)
-
-
-def methods_of(server: SimServer) -> list[Method]:
-    """Every registered method (for diagnostics)."""
-    return [m for name in server.table.names() if (m := server.table.get(name)) is not None]

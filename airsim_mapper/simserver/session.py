@@ -10,6 +10,7 @@ from airsim_mapper.simserver.robots import RobotRuntime
 from airsim_mapper.simserver.scene import SceneSpec, topic_table
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo
+from airsim_mapper.simserver.world import World
 
 TRAJECTORY_KEYS = (
     "time",
@@ -49,7 +50,7 @@ class TrajectoryStore:
 class Session:
     """Everything that exists while one scene is loaded."""
 
-    def __init__(self, spec: SceneSpec, world: Any, hub: TopicHub) -> None:
+    def __init__(self, spec: SceneSpec, world: World, hub: TopicHub) -> None:
         self.spec = spec
         self.hub = hub
         self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start)
@@ -120,7 +121,7 @@ class Session:
         dt = (now - self.last_tick_ns) / 1e9
         self.last_tick_ns = now
         for robot in self.robots.values():
-            robot.tick(dt)
+            robot.tick(dt, now)
             if publish_pose:
                 robot.publish_pose(now)
             robot.step_instruments(now)

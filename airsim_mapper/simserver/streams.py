@@ -4,12 +4,11 @@ Cameras, lidars and radars are heavy (ray casts) and run on the sensor thread; i
 and rotor info are cheap and run on the simulation thread. Heavy sensors work only while someone
 subscribes (or a GetImages call waits); instruments publish at their nominal rate while subscribed and
 refresh their cached value about once a second otherwise, so a new subscriber always gets a recent value.
-The sensor modules (camera, lidar, radar, instruments) are pure numpy and are written by the sensors side.
+The sensor modules (camera, lidar, radar, instruments) are pure numpy; this module only schedules them.
 """
 
 from __future__ import annotations
 
-import importlib
 import logging
 import math
 import threading
@@ -20,25 +19,17 @@ from typing import Any, ClassVar
 import numpy as np
 
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
-from airsim_mapper.simserver import messages, protocol
+from airsim_mapper.simserver import camera, instruments, lidar, messages, protocol, radar
 from airsim_mapper.simserver.motion import Body, Kinematic
 from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
 from airsim_mapper.simserver.services import ServiceError
 from airsim_mapper.simserver.topics import TopicHub
+from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.streams")
 
 GET_IMAGES_TIMEOUT_S = 5.0
 IDLE_REFRESH_NS = 1_000_000_000
-
-
-def sensor_module(name: str) -> Any | None:
-    """A sensor module of this package, or None (logged) while it is not available."""
-    try:
-        return importlib.import_module(f"airsim_mapper.simserver.{name}")
-    except ImportError as exc:
-        LOG.warning("sensor module %s is not available (%s); its topics stay silent", name, exc)
-        return None
 
 
 def mount_pose(
@@ -74,7 +65,7 @@ class Schedule:
 class CameraStream:
     """One camera: renders the capture-enabled types that are subscribed or requested by GetImages."""
 
-    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: Any, hub: TopicHub) -> None:
+    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
         self.sensor = sensor
         self.prefix = prefix
         self.body = body
@@ -87,7 +78,6 @@ class CameraStream:
         gimbal = sensor.config.get("gimbal")
         self.gimbal = dict(gimbal) if isinstance(gimbal, dict) else None
         self.schedule = Schedule(int(sensor.capture_interval * 1e9))
-        self.module = sensor_module("camera")
         self._cond = threading.Condition()
         self._requests: dict[int, int] = {}  # image type -> number of waiting GetImages calls
         self._request_time_ns = -1
@@ -99,10 +89,8 @@ class CameraStream:
 
     def publish_infos(self) -> None:
         """CameraInfo once at scene start (cached; type 5 lands on its image topic, the real quirk)."""
-        if self.module is None:
-            return
         for image_type, capture in self.captures.items():
-            info = self.module.camera_info_message(capture.width, capture.height, capture.fov_deg)
+            info = camera.camera_info_message(capture.width, capture.height, capture.fov_deg)
             self.hub.publish(info_topic_path(self.prefix, image_type), info)
 
     def set_pose(self, position: np.ndarray, orientation: np.ndarray) -> None:
@@ -128,7 +116,7 @@ class CameraStream:
         """Capture if due and wanted; True if it rendered."""
         with self._cond:
             urgent = self._request_time_ns > self._latest_ns
-        if self.module is None or not (self.schedule.due(now_ns) or urgent):
+        if not (self.schedule.due(now_ns) or urgent):
             return False
         wanted = self._wanted()
         if not wanted:
@@ -144,7 +132,7 @@ class CameraStream:
             groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
         latest: dict[int, dict[str, Any]] = {}
         for (width, height, fov), types in groups.items():
-            rendered = self.module.render(self.world, position, orientation, width, height, fov, types)
+            rendered = camera.render(self.world, position, orientation, width, height, fov, types)
             for image_type, img in rendered.items():
                 message = messages.image(
                     now_ns, img.encoding, img.width, img.height, img.data, position, orientation
@@ -189,11 +177,10 @@ class CameraStream:
 class LidarStream:
     """A lidar: one report per period (report-frequency, else one per horizontal rotation)."""
 
-    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: Any, hub: TopicHub) -> None:
+    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
         self.path = f"{prefix}/lidar"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
-        module = sensor_module("lidar")
-        self.model = module.LidarModel.from_config(dict(sensor.config)) if module is not None else None
+        self.model = lidar.LidarModel.from_config(dict(sensor.config))
         rate = (
             sensor.config.get("report-frequency")
             or sensor.config.get("horizontal-rotation-frequency")
@@ -203,7 +190,7 @@ class LidarStream:
         self.last_ns: int | None = None
 
     def step(self, now_ns: int) -> bool:
-        if self.model is None or not self.schedule.due(now_ns):
+        if not self.schedule.due(now_ns):
             return False
         if not self.hub.is_subscribed(self.path):
             self.last_ns = None
@@ -231,18 +218,15 @@ class LidarStream:
 class RadarStream:
     """A radar: detections every detection-interval, tracks every track-interval (while subscribed)."""
 
-    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: Any, hub: TopicHub) -> None:
+    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
         self.detections_path = f"{prefix}/radar_detections"
         self.tracks_path = f"{prefix}/radar_tracks"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
-        module = sensor_module("radar")
-        self.model = module.RadarModel.from_config(dict(sensor.config)) if module is not None else None
+        self.model = radar.RadarModel.from_config(dict(sensor.config))
         self.detect_schedule = Schedule(int(float(sensor.config.get("detection-interval", 0.1)) * 1e9))
         self.track_schedule = Schedule(int(float(sensor.config.get("track-interval", 0.2)) * 1e9))
 
     def step(self, now_ns: int) -> bool:
-        if self.model is None:
-            return False
         worked = False
         kin = self.body.snapshot()
         position, orientation = mount_pose(kin, self.sensor.position, self.sensor.orientation)
@@ -289,7 +273,7 @@ class InstrumentStream:
         sensor: SensorSpec,
         prefix: str,
         body: Body,
-        world: Any,
+        world: World,
         hub: TopicHub,
         home_geo: tuple[float, float, float],
         start_ns: int,
@@ -297,37 +281,32 @@ class InstrumentStream:
         self.path = f"{prefix}/{self.LEAVES[sensor.type]}"
         self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
         self.start_ns = start_ns
-        self.module = sensor_module("instruments")
         rate = float(sensor.config.get("update-frequency", 100.0) or 100.0)
         self.schedule = Schedule(int(1e9 / rate))
         self.idle = Schedule(IDLE_REFRESH_NS)
 
-    def message(self, now_ns: int) -> dict[str, Any] | None:
-        if self.module is None:
-            return None
-        kin = self.module.Kinematics(**vars(self.body.snapshot()))
+    def message(self, now_ns: int) -> dict[str, Any]:
+        kin = instruments.Kinematics(**vars(self.body.snapshot()))
         cfg = dict(self.sensor.config)
         kind = self.sensor.type
         if kind == "imu":
-            return self.module.imu_message(kin, cfg, now_ns)
+            return instruments.imu_message(kin, cfg, now_ns)
         if kind == "gps":
-            return self.module.gps_message(kin, self.home_geo, cfg, now_ns)
+            return instruments.gps_message(kin, self.home_geo, cfg, now_ns)
         if kind == "barometer":
-            return self.module.barometer_message(kin, self.home_geo, cfg, now_ns)
+            return instruments.barometer_message(kin, self.home_geo, cfg, now_ns)
         if kind == "magnetometer":
-            return self.module.magnetometer_message(kin, cfg, now_ns)
+            return instruments.magnetometer_message(kin, cfg, now_ns)
         if kind == "distance-sensor":
-            return self.module.distance_message(self.world, kin, cfg, now_ns)
+            return instruments.distance_message(self.world, kin, cfg, now_ns)
         if kind == "battery":
-            return self.module.battery_message(now_ns, cfg, max(0.0, (now_ns - self.start_ns) / 1e9))
-        return self.module.airspeed_message(kin, cfg, now_ns)
+            return instruments.battery_message(now_ns, cfg, max(0.0, (now_ns - self.start_ns) / 1e9))
+        return instruments.airspeed_message(kin, cfg, now_ns)
 
     def step(self, now_ns: int) -> None:
         subscribed = self.hub.is_subscribed(self.path)
         if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
-            message = self.message(now_ns)
-            if message is not None:
-                self.hub.publish(self.path, message)
+            self.hub.publish(self.path, self.message(now_ns))
 
 
 class RotorStream:
@@ -344,7 +323,7 @@ class RotorStream:
         self.idle = Schedule(IDLE_REFRESH_NS)
         self.angle = 0.0
 
-    def message(self, now_ns: int, dt: float = 0.0) -> dict[str, Any]:
+    def message(self, now_ns: int) -> dict[str, Any]:
         spinning = self.body.armed or not self.body.landed()
         vec = []
         for rotor_id, settings in self.rotors:

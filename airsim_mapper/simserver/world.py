@@ -1,7 +1,9 @@
 """The world the headless server senses: a ground plane at NED z = 0 plus boxes and spheres.
 
-Everything is pure numpy. `World.raycast` intersects many rays with every object at once (slab test for
-yawed boxes, quadratic for spheres, broadcast over rays x objects in chunks, float32) and with the ground.
+Everything is pure numpy (float32, rays in blocks of 32k). `World.raycast` tests every ray against every
+object's bounding sphere at once (a (objects x rays) matrix product), then runs the exact test over the
+surviving (ray, object) pairs as flat vectors: a slab test in the box's yawed frame, or the quadratic for a
+sphere; the nearest of the pairs and the ground plane wins per ray.
 Surfaces are one-sided: a ray that starts inside an object does not see that object (back faces are
 culled), and the ground is seen only from above (z < 0).
 
@@ -28,7 +30,7 @@ GROUND_INDEX = -1
 MISS_INDEX = -2
 MISS_SEGMENTATION_ID = 0
 _EPS = 1e-4  # hits closer than this are ignored (self hits at the ray origin)
-_CHUNK = 16384  # rays per broadcast block: bounds the (rays x objects) temporaries
+_CHUNK = 32768  # rays per broadcast block: bounds the (rays x objects) temporaries
 _UP = np.array([0.0, 0.0, -1.0], dtype=np.float32)  # ground normal in NED
 # face codes of a hit: none, ground, then 6 per box; a sphere hit s is coded -1 - s
 _FACE_NONE, _FACE_GROUND, _FACE_BOX0 = 0, 1, 2
@@ -71,6 +73,9 @@ class Hits:
     object_index: np.ndarray  # (N,) int32, index into World.objects, -1 ground, -2 miss
     normal: np.ndarray  # (N, 3) float32, unit surface normal in world NED (zeros on a miss)
     segmentation_id: np.ndarray  # (N,) int32, the ground has its own id, a miss is 0
+    # (N,) int32 face code: 0 miss, 1 ground, 2 + 6 b + 2 axis + (1 for the + face) for the b-th box,
+    # -1 - s for the s-th sphere (in World.objects order); flat faces index World.face_table
+    face: np.ndarray | None = None
 
     @property
     def hit(self) -> np.ndarray:
@@ -113,17 +118,17 @@ class World:
         boxes = [i for i, o in enumerate(self.objects) if o.shape == "box"]
         spheres = [i for i, o in enumerate(self.objects) if o.shape == "sphere"]
         f32 = np.float32
-        self._box_index = np.array(boxes, dtype=np.int32)
+        self._box_index = np.array(boxes, dtype=np.intp)
         self._box_center = np.array([self.objects[i].center for i in boxes], dtype=f32).reshape(-1, 3)
         self._box_half = np.array([self.objects[i].size / 2.0 for i in boxes], dtype=f32).reshape(-1, 3)
         yaws = np.array([self.objects[i].yaw for i in boxes], dtype=np.float64)
         self._box_cos = np.cos(yaws).astype(f32)
         self._box_sin = np.sin(yaws).astype(f32)
-        self._sphere_index = np.array(spheres, dtype=np.int32)
+        self._sphere_index = np.array(spheres, dtype=np.intp)
         self._sphere_center = np.array([self.objects[i].center for i in spheres], dtype=f32).reshape(-1, 3)
         self._sphere_radius = np.array([self.objects[i].size[0] / 2.0 for i in spheres], dtype=f32)
         # columns of the candidate table: boxes first, then spheres
-        self._column_object = np.concatenate([self._box_index, self._sphere_index]).astype(np.int32)
+        self._column_object = np.concatenate([self._box_index, self._sphere_index]).astype(np.intp)
         column_objects = [self.objects[i] for i in self._column_object]
         self._bound_center = np.array([o.center for o in column_objects], dtype=f32).reshape(-1, 3)
         self._bound_r2 = np.array([o.radius**2 for o in column_objects], dtype=f32) * f32(1.0001)
@@ -140,6 +145,10 @@ class World:
         colors = [self.sky_color_bgr, self.ground_color_bgr, *(o.color_bgr for o in self.objects)]
         self._color_lookup = np.array(colors, dtype=np.float32).reshape(-1, 3)
         self._by_name = {o.name: o for o in self.objects}
+        face_owner = np.concatenate([[MISS_INDEX, GROUND_INDEX], np.repeat(self._box_index, 6)]).astype(
+            np.intp
+        )
+        self._face_colors = np.ascontiguousarray(self._color_lookup[face_owner + 2].T)
 
     def _face_normal_table(self) -> np.ndarray:
         """(3, 2 + 6B) world normals by face code: none, ground, then box b's -x, +x, -y, +y, -z, +z faces."""
@@ -153,13 +162,24 @@ class World:
                 table[:, _FACE_BOX0 + 6 * b + 2 * axis + 1] = axes[axis]
         return table
 
+    @property
+    def face_table(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per face code >= 0 (see Hits.face): (3, F) world normals and (3, F) base B, G, R colours.
+
+        Code 0 (miss) has a zero normal and the sky colour; code 1 is the ground.
+        """
+        return self._face_normals, self._face_colors
+
     def object_named(self, name: str) -> WorldObject | None:
         return self._by_name.get(name)
 
     def colors_of(self, object_index: np.ndarray) -> np.ndarray:
         """(3, N) base B, G, R rows (float32, 0-255) of each hit: sky for a miss, ground, or the object."""
-        slots = np.asarray(object_index) + 2
-        return np.stack([np.take(self._color_lookup[:, c], slots) for c in range(3)])
+        slots = np.asarray(object_index).astype(np.intp) + 2
+        out = np.empty((3, slots.size), dtype=np.float32)
+        for c in range(3):
+            np.take(self._color_lookup[:, c], slots, out=out[c], mode="clip")
+        return out
 
     # ---------------------------------------------------------------- ray casting
     def raycast(self, origins: np.ndarray, directions: np.ndarray, max_range: float) -> Hits:
@@ -194,17 +214,17 @@ class World:
         local_origin = self._box_local_origins(o) if shared else None
         for start in range(0, count, _CHUNK):
             stop = min(start + _CHUNK, count)
-            block_o = o if shared else o[:, start:stop]
+            block_o = o if shared else np.ascontiguousarray(o[:, start:stop])
             distance[start:stop], index[start:stop], face[start:stop] = self._cast_block(
-                block_o, d[:, start:stop], local_origin
+                block_o, np.ascontiguousarray(d[:, start:stop]), local_origin
             )
         miss = ~(distance <= np.float32(max_range))
         distance[miss] = np.inf
         index[miss] = MISS_INDEX
         face[miss] = _FACE_NONE
         normal = self._normals(o, d, distance, face)
-        segmentation = np.take(self._segmentation_lookup, index + 2)
-        return Hits(distance=distance, object_index=index, normal=normal.T, segmentation_id=segmentation)
+        segmentation = np.take(self._segmentation_lookup, index.astype(np.intp) + 2, mode="clip")
+        return Hits(distance, index, normal.T, segmentation, face)
 
     def _box_local_origins(self, o: np.ndarray) -> np.ndarray:
         """(3, B) one shared ray origin expressed in every box's frame."""
@@ -224,94 +244,115 @@ class World:
             ground = np.where((d[2] > 1e-6) & (o[2] < 0.0), -o[2] / d[2], np.float32(np.inf))
         best = ground.astype(np.float32, copy=False)
         on_ground = best < np.inf
-        best_index = np.where(on_ground, GROUND_INDEX, MISS_INDEX).astype(np.int32)
-        best_face = np.where(on_ground, _FACE_GROUND, _FACE_NONE).astype(np.int32)
+        best_index = np.where(on_ground, np.int32(GROUND_INDEX), np.int32(MISS_INDEX))
+        best_face = on_ground.astype(np.int32)  # _FACE_GROUND or _FACE_NONE
         if not self.objects:
             return best, best_index, best_face
         c = self._bound_center  # (K, 3)
-        proj = c @ d - (o * d).sum(axis=0)  # (centre - origin) . d, (K, n)
-        dist2 = self._bound_c2[:, None] - 2.0 * (c @ o) + (o * o).sum(axis=0)  # |centre - origin|^2
-        r2 = self._bound_r2[:, None]
-        candidate = (dist2 - proj * proj <= r2) & ((proj > 0.0) | (dist2 <= r2))
-        cols, rays = np.nonzero(candidate)
+        if o.shape[1] == 1:
+            # one origin: a ray can reach bounding sphere k only if its projection on the centre
+            # direction is at least sqrt(|centre - origin|^2 - r^2); origins inside the sphere always can
+            rel = c - o[:, 0]
+            dist2 = (rel * rel).sum(axis=1)
+            gap = dist2 - self._bound_r2
+            threshold = np.where(gap > 0.0, np.sqrt(np.maximum(gap, 0.0)), -np.inf).astype(np.float32)
+            candidate = rel.astype(np.float32) @ d >= threshold[:, None]
+        else:
+            proj = c @ d - (o * d).sum(axis=0)  # (centre - origin) . d, (K, n)
+            dist2 = self._bound_c2[:, None] - 2.0 * (c @ o) + (o * o).sum(axis=0)  # |centre - origin|^2
+            r2 = self._bound_r2[:, None]
+            candidate = (dist2 - proj * proj <= r2) & ((proj > 0.0) | (dist2 <= r2))
+        flat = np.flatnonzero(candidate)
+        cols, rays = np.divmod(flat, n)  # pairs come grouped by object
         if rays.size == 0:
             return best, best_index, best_face
         pair_t = np.empty(rays.size, dtype=np.float32)
         pair_face = np.empty(rays.size, dtype=np.int32)
         n_box = self._box_index.size
-        is_box = cols < n_box
-        for select, is_sphere in ((is_box, False), (~is_box, True)):
-            if not select.any():
+        # pairs are sorted by column (boxes first, then spheres): per-object values spread by repetition
+        bounds = np.searchsorted(cols, np.arange(len(self.objects) + 1))
+        counts = np.diff(bounds)
+        split = int(bounds[n_box])
+        for part, is_sphere in ((slice(0, split), False), (slice(split, rays.size), True)):
+            r = rays[part]
+            if r.size == 0:
                 continue
-            r, k = rays[select], cols[select]
-            pair_o = o if o.shape[1] == 1 else np.take(o, r, axis=1)
-            pair_d = np.take(d, r, axis=1)
+            pair_o = o if o.shape[1] == 1 else np.take(o, r, axis=1, mode="clip")
+            pair_d = np.take(d, r, axis=1, mode="clip")
             if is_sphere:
-                pair_t[select], pair_face[select] = self._sphere_pairs(pair_o, pair_d, k - n_box)
+                pair_t[part], pair_face[part] = self._sphere_pairs(pair_o, pair_d, counts[n_box:])
             else:
-                pair_t[select], pair_face[select] = self._box_pairs(pair_o, pair_d, k, local_origin)
+                pair_t[part], pair_face[part] = self._box_pairs(pair_o, pair_d, counts[:n_box], local_origin)
         table = np.full((len(self.objects), n), np.inf, dtype=np.float32)
-        table[cols, rays] = pair_t
+        table.ravel()[flat] = pair_t
         nearest = table.min(axis=0)
         closer = nearest < best
         # the winning pair of each ray is the one whose distance equals the ray's nearest distance
-        winner = (pair_t == np.take(nearest, rays)) & np.take(closer, rays)
+        winner = (pair_t == np.take(nearest, rays, mode="clip")) & np.take(closer, rays, mode="clip")
         won = rays[winner]
-        best_index[won] = np.take(self._column_object, cols[winner])
+        best_index[won] = np.take(self._column_object, cols[winner], mode="clip")
         best_face[won] = pair_face[winner]
         return np.where(closer, nearest, best), best_index, best_face
 
-    def _box_pairs(self, o: np.ndarray, d: np.ndarray, k: np.ndarray, local_origin: np.ndarray | None):
-        """Entry distance (+inf on a miss) and face code of ray i into box k[i] (slab test, box frame)."""
-        cos, sin = np.take(self._box_cos, k), np.take(self._box_sin, k)
+    def _box_pairs(self, o: np.ndarray, d: np.ndarray, counts: np.ndarray, local_origin: np.ndarray | None):
+        """Entry distance (+inf on a miss) and face code of each pair (slab test in the box frame).
+
+        The pairs are grouped by box: the first counts[0] belong to box 0, and so on.
+        """
+        cos, sin = np.repeat(self._box_cos, counts), np.repeat(self._box_sin, counts)
         if local_origin is not None:
-            local_o = [np.take(local_origin[a], k) for a in range(3)]
+            local_o = [np.repeat(local_origin[a], counts) for a in range(3)]
         else:
-            rel = [o[a] - np.take(self._box_cols[a], k) for a in range(3)]
+            rel = [o[a] - np.repeat(self._box_cols[a], counts) for a in range(3)]
             local_o = [cos * rel[0] + sin * rel[1], -sin * rel[0] + cos * rel[1], rel[2]]
         local_d = (cos * d[0] + sin * d[1], -sin * d[0] + cos * d[1], d[2])
-        near = np.full(k.shape, -np.inf, dtype=np.float32)
-        far = np.full(k.shape, np.inf, dtype=np.float32)
-        face = np.zeros(k.shape, dtype=np.int32)
-        for axis in range(3):
-            da = local_d[axis]
-            h = np.take(self._box_half_cols[axis], k)
-            inv = np.float32(1.0) / np.where(np.abs(da) < 1e-12, np.float32(1e-12), da)
-            t1 = (-h - local_o[axis]) * inv
-            t2 = (h - local_o[axis]) * inv
-            entry = np.minimum(t1, t2)
-            later = entry > near
-            near = np.where(later, entry, near)
-            # entering through the + face when travelling towards -axis
-            face = np.where(later, 2 * axis + (da < 0.0), face)
-            np.minimum(far, np.maximum(t1, t2), out=far)
-        t = np.where((near <= far) & (near > _EPS), near, np.float32(np.inf))
-        return t, _FACE_BOX0 + 6 * k + face
+        near = far = face = None
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for axis in range(3):
+                da = local_d[axis]
+                inv = np.float32(1.0) / da  # +-inf for a ray parallel to the slab
+                exit_half = np.copysign(np.repeat(self._box_half_cols[axis], counts), da)
+                entry = (exit_half + local_o[axis]) * -inv
+                leave = (exit_half - local_o[axis]) * inv
+                # the + face is entered when travelling towards -axis; NaN (grazing) never wins
+                code = (da < 0.0).astype(np.int32) + np.int32(2 * axis)
+                if near is None:
+                    near, far, face = entry, leave, code
+                    continue
+                face = np.where(entry > near, code, face)
+                near = np.fmax(near, entry)
+                far = np.fmin(far, leave)
+            t = np.where((near <= far) & (near > _EPS), near, np.float32(np.inf))
+        first_face = _FACE_BOX0 + 6 * np.arange(counts.size, dtype=np.int32)
+        return t, np.repeat(first_face, counts) + face
 
-    def _sphere_pairs(self, o: np.ndarray, d: np.ndarray, s: np.ndarray):
-        """Entry distance (+inf on a miss) and face code of ray i into sphere s[i]."""
-        rel = [o[a] - np.take(self._sphere_cols[a], s) for a in range(3)]
+    def _sphere_pairs(self, o: np.ndarray, d: np.ndarray, counts: np.ndarray):
+        """Entry distance (+inf on a miss) and face code of each pair, grouped by sphere like `_box_pairs`."""
+        rel = [o[a] - np.repeat(self._sphere_cols[a], counts) for a in range(3)]
         b = d[0] * rel[0] + d[1] * rel[1] + d[2] * rel[2]
-        c = rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2] - np.take(self._sphere_radius, s) ** 2
+        radius = np.repeat(self._sphere_radius, counts)
+        c = rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2] - radius * radius
         disc = b * b - c
         with np.errstate(invalid="ignore"):
             t = -b - np.sqrt(disc)
         t = np.where((disc >= 0.0) & (t > _EPS), t, np.float32(np.inf)).astype(np.float32)
-        return t, -1 - s
+        return t, np.repeat(-1 - np.arange(counts.size, dtype=np.int32), counts)
 
     def _normals(self, o: np.ndarray, d: np.ndarray, distance: np.ndarray, face: np.ndarray) -> np.ndarray:
         """(3, N) unit world normals at the hit points (zeros where nothing is hit)."""
-        slots = np.maximum(face, 0)
-        normal = np.stack([np.take(self._face_normals[a], slots) for a in range(3)])
+        slots = np.maximum(face, 0).astype(np.intp)
+        normal = np.empty(d.shape, dtype=np.float32)
+        for a in range(3):
+            np.take(self._face_normals[a], slots, out=normal[a], mode="clip")
         rays = np.nonzero(face < 0)[0]
         if rays.size:
-            s = -1 - face[rays]
-            pair_o = o if o.shape[1] == 1 else np.take(o, rays, axis=1)
-            dist = np.take(distance, rays)
-            radius = np.take(self._sphere_radius, s)
+            s = (-1 - face[rays]).astype(np.intp)
+            pair_o = o if o.shape[1] == 1 else np.take(o, rays, axis=1, mode="clip")
+            dist = np.take(distance, rays, mode="clip")
+            radius = np.take(self._sphere_radius, s, mode="clip")
             for a in range(3):
-                point = pair_o[a] + np.take(d[a], rays) * dist
-                normal[a, rays] = (point - np.take(self._sphere_cols[a], s)) / radius
+                point = pair_o[a] + np.take(d[a], rays, mode="clip") * dist
+                normal[a, rays] = (point - np.take(self._sphere_cols[a], s, mode="clip")) / radius
         return normal
 
     # ---------------------------------------------------------------- collisions

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from airsim_mapper.convert import frames
@@ -76,6 +76,7 @@ def test_converted_quaternions_have_non_negative_w():
     assert q[0] >= 0.0
 
 
+@settings(deadline=None)
 @given(angles, st.floats(-1.5, 1.5), angles)
 def test_attitude_round_trip_ned_enu_ned_is_the_same_rotation(roll, pitch, yaw):
     q = quat_from_rpy(roll, pitch, yaw)
@@ -83,6 +84,7 @@ def test_attitude_round_trip_ned_enu_ned_is_the_same_rotation(roll, pitch, yaw):
     assert same_rotation(back, q)
 
 
+@settings(deadline=None)
 @given(st.lists(st.tuples(finite, finite, finite), min_size=1, max_size=20))
 def test_point_round_trips_are_exact(points):
     array = np.array(points)
@@ -90,6 +92,7 @@ def test_point_round_trips_are_exact(points):
     assert np.array_equal(frames.flu_to_frd(frames.frd_to_flu(array)), array)
 
 
+@settings(deadline=None)
 @given(angles, st.floats(-1.5, 1.5), angles)
 def test_relative_rotation_round_trip_frd_flu_frd_is_the_same_rotation(roll, pitch, yaw):
     q = quat_from_rpy(roll, pitch, yaw)

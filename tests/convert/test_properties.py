@@ -119,7 +119,7 @@ def test_every_sim_converter_has_a_valid_example_that_converts():
             serialises(registry.get(name)(copy.deepcopy(VALID[name]), ctx))
 
 
-@settings(max_examples=150, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(SIM_CONVERTERS), junk, st.sampled_from(CONTEXTS))
 def test_random_values_only_raise_conversion_error(name, value, ctx):
     run_sim(name, value, ctx)
@@ -160,13 +160,14 @@ def mutated(draw):
     return name, _mutate(base, path, action, draw(junk))
 
 
-@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(mutated(), st.sampled_from(CONTEXTS))
 def test_damaged_valid_messages_only_raise_conversion_error(case, ctx):
     name, msg = case
     run_sim(name, msg, ctx)
 
 
+@settings(deadline=None)
 @given(st.integers(0, 64), st.sampled_from(["BGR", "16FC1", "16UC1", "GRAY8", "PNG"]))
 def test_truncated_image_data_only_raises_conversion_error(keep, encoding):
     msg = {"time_stamp": 1, "width": 4, "height": 4, "encoding": encoding, "data": bytes(range(64))[:keep]}
@@ -179,6 +180,7 @@ LIMITED = ConvertContext(
 )
 
 
+@settings(deadline=None)
 @given(floats, floats, floats, floats, st.sampled_from([*CONTEXTS, LIMITED]))
 def test_cmd_vel_returns_finite_bounded_params_or_conversion_error(vx, vy, vz, yaw, ctx):
     twist = Twist(linear=Vector3(vx, vy, vz), angular=Vector3(0.0, 0.0, yaw))
@@ -194,6 +196,7 @@ def test_cmd_vel_returns_finite_bounded_params_or_conversion_error(vx, vy, vz, y
         assert abs(values[2]) <= 1.0 and abs(values[3]) <= 1.0
 
 
+@settings(deadline=None)
 @given(
     st.tuples(floats, floats, floats), st.tuples(floats, floats, floats, floats), st.sampled_from(CONTEXTS)
 )
@@ -211,6 +214,7 @@ def test_pose_commands_return_unit_quaternions_or_conversion_error(position, q, 
         assert math.isclose(math.sqrt(sum(v * v for v in rotation.values())), 1.0, rel_tol=1e-9)
 
 
+@settings(deadline=None)
 @given(st.tuples(floats, floats, floats), st.tuples(floats, floats, floats, floats))
 def test_enu_pose_command_round_trips_through_the_pose_converter(position, q):
     w, x, y, z = q

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import rospy
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from airsim_mapper.convert.context import ConvertContext
@@ -29,6 +29,7 @@ def test_numpy_integers_are_accepted():
     assert convert_stamp(np.int64(5)).to_nsec() == 5
 
 
+@settings(deadline=None)
 @given(st.integers(0, MAX_STAMP_NS))
 def test_every_representable_stamp_round_trips(ns):
     assert convert_stamp(ns).to_nsec() == ns

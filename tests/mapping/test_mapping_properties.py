@@ -79,7 +79,7 @@ def check_mapping(text: str) -> None:
         assert isinstance(result, Mapping)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(st.text(alphabet=st.characters(codec="utf-8"), max_size=200))
 def test_random_text_gives_a_mapping_or_a_mapping_error(text):
     check_mapping(text)
@@ -91,7 +91,7 @@ def test_random_yaml_documents_give_a_mapping_or_a_mapping_error(value):
     check_mapping(yaml.safe_dump(value))
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=60, deadline=None)
 @given(st.integers(0, len(DEFAULT_DATA["rules"]) - 1), st.sampled_from(WORDS[4:20]), json_values)
 def test_a_default_mapping_with_one_value_replaced_gives_a_mapping_or_a_mapping_error(index, key, value):
     data = json.loads(json.dumps(DEFAULT_DATA))

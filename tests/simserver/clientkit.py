@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import functools
+import json
 import threading
 import time
 from collections.abc import Callable
@@ -46,10 +48,27 @@ def subscribe(client: Any, topic: str) -> Inbox:
     return inbox
 
 
+@functools.cache
+def _merged_config(scene_file: str) -> str:
+    from projectairsim.utils import load_scene_config_as_dict
+
+    config, _ = load_scene_config_as_dict(scene_file, sim_config_path=str(SIM_CONFIG))
+    return json.dumps(config)
+
+
+def scene_config(scene_file: str) -> dict[str, Any]:
+    """The merged scene dict the client builds from a shared scene file (parsed once per test run:
+    the client's jsonc parser takes seconds per file)."""
+    return json.loads(_merged_config(scene_file))
+
+
 def load_world(client: Any, scene_file: str) -> Any:
+    """A World on a freshly (re)loaded shared scene, through the client's own `World.load_scene`."""
     from projectairsim import World
 
-    return World(client, scene_file, sim_config_path=str(SIM_CONFIG))
+    world = World(client)
+    world.load_scene(scene_config(scene_file))
+    return world
 
 
 def run_async(coroutine_factory: Callable[[], Any]) -> Any:

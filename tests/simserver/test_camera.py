@@ -114,7 +114,7 @@ def test_segmentation_colours_identify_ball_ground_and_sky_at_pixels_projected_w
 
     def pixel_of(point):
         cam = (np.asarray(point) - position) @ quat_to_matrix(orientation)  # world -> camera frame
-        return int(round(k[0] * cam[1] / cam[0] + k[2])), int(round(k[4] * cam[2] / cam[0] + k[5]))
+        return round(k[0] * cam[1] / cam[0] + k[2]), round(k[4] * cam[2] / cam[0] + k[5])
 
     u, v = pixel_of(ball.center)
     assert tuple(seg[v, u]) == segmentation_color(ball.segmentation_id)

@@ -5,9 +5,10 @@ from __future__ import annotations
 import time
 
 import pytest
+from harness import SIM_CONFIG
 from projectairsim import Drone, World
 
-from simserver.clientkit import load_world
+from simserver.clientkit import load_world, scene_config
 from simserver.expected_topics import EXPECTED, ROBOTS
 
 
@@ -36,6 +37,13 @@ def test_world_and_drone_load_each_shared_scene_with_the_documented_topic_catalo
         assert leaves - quirk <= set(client.topics)
         assert not quirk & set(client.topics)
         assert drone.robot_info["actual_pose"] in client.topics
+
+
+def test_the_client_world_constructor_loads_a_scene_file_from_the_shared_configs(client):
+    world = World(client, "scene_basic_drone.jsonc", sim_config_path=str(SIM_CONFIG))
+    assert world.parent_topic == "/Sim/SceneBasicDrone"
+    assert set(client.topics) == EXPECTED["scene_basic_drone.jsonc"][1] | {"/$topics"}
+    assert Drone(client, world, "Drone1").get_ground_truth_pose()["translation"]["z"] == -4.0
 
 
 def test_a_world_without_a_scene_name_imports_its_null_trajectory_on_the_default_scene(client):
@@ -81,18 +89,12 @@ def test_a_paused_sim_holds_motion_until_it_continues(client):
     assert drone.get_ground_truth_pose()["translation"]["x"] == pytest.approx(1.0, abs=0.06)
 
 
-def test_real_time_scenes_report_unix_time_and_refuse_to_pause(client, tmp_path):
-    import json
-
-    from harness import SIM_CONFIG
-
-    scene = json.loads((SIM_CONFIG / "scene_basic_drone.jsonc").read_text())
+def test_real_time_scenes_report_unix_time_and_refuse_to_pause(client):
+    scene = scene_config("scene_basic_drone.jsonc")
     scene["clock"] = {"type": "real-time"}
     scene["id"] = "RealTimeScene"
-    (tmp_path / "scene_rt.jsonc").write_text(json.dumps(scene))
-    for name in ("robot_quadrotor_fastphysics.jsonc",):
-        (tmp_path / name).write_text((SIM_CONFIG / name).read_text())
-    world = World(client, "scene_rt.jsonc", sim_config_path=str(tmp_path))
+    world = World(client)
+    world.load_scene(scene)
     assert world.get_sim_clock_type() == "real-time"
     assert abs(world.get_sim_time() - time.time_ns()) < 2_000_000_000
     with pytest.raises(

@@ -5,8 +5,6 @@ from __future__ import annotations
 import json
 
 import pytest
-from harness import SIM_CONFIG
-from projectairsim.utils import load_scene_config_as_dict
 
 from airsim_mapper.simserver.scene import (
     SceneError,
@@ -17,13 +15,13 @@ from airsim_mapper.simserver.scene import (
     parse_scene,
     topic_table,
 )
+from simserver.clientkit import scene_config
 from simserver.expected_topics import EXPECTED
 
 
 def merged_scene(name: str) -> str:
     """The JSON string the real client sends with LoadScene (robot configs inlined by the client itself)."""
-    config, _ = load_scene_config_as_dict(name, sim_config_path=str(SIM_CONFIG))
-    return json.dumps(config)
+    return json.dumps(scene_config(name))
 
 
 def minimal(**overrides) -> dict:

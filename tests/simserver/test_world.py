@@ -264,7 +264,7 @@ def test_a_yaml_world_file_is_accepted(tmp_path):
 )
 def test_world_file_errors_name_the_file_and_the_key(tmp_path, data, key, problem):
     path = write(tmp_path, data)
-    with pytest.raises(WorldError, match="world file .*world.json: key") as caught:
+    with pytest.raises(WorldError, match=r"world file .*world\.json: key") as caught:
         load_world(path)
     assert caught.value.key == key
     assert str(path) in str(caught.value)

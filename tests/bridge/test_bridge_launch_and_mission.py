@@ -1,0 +1,118 @@
+"""The other ways to run the bridge: the two-drone scene, roslaunch, and hello_ros.py (mission script and
+bridge sharing one client)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from bridgeharness import published_topics, wait_topic
+from harness import ROOT, wait_until
+
+
+def test_two_drone_scene_bridges_both_robots_and_their_frames(rig_factory):
+    import rospy
+    import tf2_ros
+
+    rig = rig_factory()
+    rig.start_node(
+        "--scene",
+        "scene_two_drones.jsonc",
+        node_name="two_bridge",
+        wait_for="/airsim_node/Drone2/FrontCamera/depth_planar_camera/camera_info",
+    )
+    topics = published_topics()
+    for robot in ("Drone1", "Drone2"):
+        assert topics[f"/airsim_node/{robot}/actual_pose"] == "geometry_msgs/PoseStamped"
+        assert topics[f"/airsim_node/{robot}/FrontCamera/camera_pose"] == "geometry_msgs/PoseStamped"
+        for kind in ("scene_camera", "depth_planar_camera"):
+            assert topics[f"/airsim_node/{robot}/FrontCamera/{kind}/image"] == "sensor_msgs/Image"
+            assert topics[f"/airsim_node/{robot}/FrontCamera/{kind}/camera_info"] == "sensor_msgs/CameraInfo"
+    buffer = tf2_ros.Buffer()
+    tf2_ros.TransformListener(buffer)
+    east = []
+    for robot in ("Drone1", "Drone2"):
+        tf = buffer.lookup_transform("map", f"airsim_node/{robot}", rospy.Time(0), rospy.Duration(10))
+        east.append(tf.transform.translation.y)
+    assert east == [-2.5, 2.5]
+    rig.node.stop()
+
+
+def test_roslaunch_starts_the_node_and_its_topics_appear(rig_factory):
+    rig = rig_factory()
+    rig.launcher.start(
+        "roslaunch",
+        [
+            "roslaunch",
+            str(ROOT / "launch" / "projectairsim.launch"),
+            f"topicsport:={rig.sim.topics_port}",
+            f"servicesport:={rig.sim.services_port}",
+            "scene:=scene_two_drones.jsonc",
+            "nodename:=launched_bridge",
+        ],
+    )
+    wait_topic("/airsim_node/Drone2/actual_pose", timeout=90)
+    import rosgraph
+
+    _pubs, subs, _srvs = rosgraph.Master("/probe").getSystemState()
+    assert any(t == "/ProjectAirSim/node/launched_bridge/load_scene" for t, _ in subs)
+    rig.launcher.stop_all()
+
+
+def test_hello_ros_flies_to_the_ball_while_the_bridge_publishes(rig_factory):
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import Image
+
+    rig = rig_factory()
+    mission = rig.launcher.python(
+        "hello_ros",
+        [
+            str(ROOT / "scripts" / "hello_ros.py"),
+            "--topicsport",
+            str(rig.sim.topics_port),
+            "--servicesport",
+            str(rig.sim.services_port),
+            "--nodename",
+            "hello",
+            "--speed",
+            "8",
+            "--seconds",
+            "60",
+        ],
+    )
+    wait_topic("/airsim_node/Drone1/actual_pose", mission)
+    track: list[np.ndarray] = []
+    images: list[float] = []
+    rospy.Subscriber(
+        "/airsim_node/Drone1/actual_pose",
+        PoseStamped,
+        lambda m: track.append(np.array([m.pose.position.x, m.pose.position.y, m.pose.position.z])),
+    )
+    rospy.Subscriber(
+        "/airsim_node/Drone1/DownCamera/scene_camera/image", Image, lambda m: images.append(time.monotonic())
+    )
+    ball = np.array([20.0, 20.0, -3.0])  # the default world's orange ball
+
+    def near_ball() -> bool:
+        if not mission.alive():
+            raise AssertionError(mission.output())
+        return bool(track) and np.linalg.norm(track[-1] - ball) < 6.0
+
+    wait_until(near_ball, 45, interval=0.2, what="the drone to reach the ball")
+    assert len(images) > 10  # the bridge kept publishing during the mission
+    assert mission.alive()
+    mission.stop()
+    assert mission.popen.returncode == 0, mission.output()
+    assert unexpected_tracebacks(mission.output()) == []
+
+
+def unexpected_tracebacks(output: str) -> list[str]:
+    """Tracebacks in a log, except pynng's own noise when the client's abandoned request contexts are
+    garbage-collected after disconnect ("Exception ignored in: <function Context.__del__ ...>")."""
+    lines = output.splitlines()
+    return [
+        lines[i + 1] if i + 1 < len(lines) else line
+        for i, line in enumerate(lines)
+        if line.startswith("Traceback") and not (i > 0 and "Context.__del__" in lines[i - 1])
+    ]
