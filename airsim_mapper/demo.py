@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-OUT = ROOT / "out"
+OUT = Path(os.environ.get("DEMO_OUT", ROOT / "out"))
 BAG_SECONDS = 3
 BAG_EXCLUDE = "(.*/Chase/.*)|(/airsim_streaming_camera/.*)"
 ROBOT, CAMERA, LIDAR = "Drone1", "DownCamera", "lidar1"
@@ -225,26 +225,31 @@ class Demo:
         raise DemoError(f"the bridge's topics did not appear within {timeout:.0f} s; see {mission.log}")
 
     def subscribe(self, types: dict[str, str]) -> None:
+        """One subscriber per topic (rospy shares one connection per topic and process): typed for what
+        the picture needs, AnyMsg (no deserialisation) for the rest."""
         import rospy
         from geometry_msgs.msg import PoseStamped
         from sensor_msgs.msg import Image, PointCloud2
 
-        typed = {"sensor_msgs/Image": Image, "sensor_msgs/PointCloud2": PointCloud2}
+        pose_topic = f"/airsim_node/{ROBOT}/actual_pose"
         for topic, ros_type in types.items():
-            keep = ros_type in typed and (f"/{CAMERA}/" in topic or topic.endswith("/lidar"))
-            cls = typed[ros_type] if keep else rospy.AnyMsg
-            rospy.Subscriber(topic, cls, self.on_message, callback_args=(topic, keep), queue_size=1)
-        rospy.Subscriber(f"/airsim_node/{ROBOT}/actual_pose", PoseStamped, self.on_pose, queue_size=10)
+            if topic == pose_topic:
+                cls = PoseStamped
+            elif ros_type == "sensor_msgs/Image" and f"/{CAMERA}/" in topic:
+                cls = Image
+            elif ros_type == "sensor_msgs/PointCloud2":
+                cls = PointCloud2
+            else:
+                cls = rospy.AnyMsg
+            rospy.Subscriber(topic, cls, self.on_message, callback_args=topic, queue_size=1)
 
-    def on_message(self, msg: object, args: tuple[str, bool]) -> None:
-        topic, keep = args
+    def on_message(self, msg: object, topic: str) -> None:
         self.rates.tick(topic)
-        if keep:
+        if topic.endswith("/actual_pose"):
+            p = msg.pose.position
+            self.track.append((p.x, p.y, p.z))
+        elif not isinstance(msg, __import__("rospy").AnyMsg):
             self.latest[topic] = msg
-
-    def on_pose(self, msg) -> None:
-        p = msg.pose.position
-        self.track.append((p.x, p.y, p.z))
 
     def position(self) -> str:
         if not self.track:
