@@ -40,7 +40,12 @@ def intrinsics(width: int, height: int, fov_degrees: float) -> Intrinsics:
 
 @sim_fields.converter("camera_info")
 def camera_info(msg: Mapping[str, Any], ctx: ConvertContext) -> CameraInfo:
-    """CameraInfo for the image ``msg`` (width, height, time_stamp) and ctx.source's ``fov-degrees``."""
+    """CameraInfo for the image ``msg`` (width, height, time_stamp) and ctx.source's ``fov-degrees``.
+
+    The simulator's own CameraInfo on the disparity image topic (see sim_fields.is_camera_info) is skipped:
+    it has no stamp, and the next image brings the same information."""
+    if sim_fields.is_camera_info(msg):
+        return None
     width = sim_fields.integer(sim_fields.field(msg, "width", "image"), "camera_info: width")
     height = sim_fields.integer(sim_fields.field(msg, "height", "image"), "camera_info: height")
     if width <= 0 or height <= 0:

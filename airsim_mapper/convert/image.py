@@ -124,7 +124,10 @@ def _payload(msg: Mapping[str, Any], encoding: str) -> bytes:
 
 @sim_fields.converter("image")
 def image(msg: Mapping[str, Any], ctx: ConvertContext) -> Image:
-    """sim Image -> sensor_msgs/Image (see the module docstring for encodings)."""
+    """sim Image -> sensor_msgs/Image (see the module docstring for encodings); None for the CameraInfo
+    the simulator sends on the disparity image topic."""
+    if sim_fields.is_camera_info(msg):
+        return None
     encoding = sim_fields.field(msg, "encoding", "image")
     spec = ENCODINGS.get(encoding) if isinstance(encoding, str) else None
     if spec is None:

@@ -95,3 +95,9 @@ def pose(msg: Any, key: str | None = None, where: str = "message") -> tuple[np.n
     body = msg if key is None else as_map(field(msg, key, where), key)
     name = where if key is None else key
     return vector3(body, "position", name), quaternion(body, "orientation", name)
+
+
+def is_camera_info(msg: Any) -> bool:
+    """True for a sim CameraInfo message. The simulator publishes the disparity type's CameraInfo on the
+    image topic itself (its info topic has the image's name), so image converters meet these."""
+    return isinstance(msg, Mapping) and "intrinsic_camera_matrix" in msg and "data" not in msg

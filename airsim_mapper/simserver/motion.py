@@ -289,6 +289,18 @@ class Body:
 
     # -- integration
 
+    def _at_rest(self) -> bool:
+        state = self.state
+        return not any(
+            np.any(v)
+            for v in (
+                state.linear_velocity,
+                state.angular_velocity,
+                state.linear_acceleration,
+                state.angular_acceleration,
+            )
+        )
+
     def tick(
         self,
         dt: float,
@@ -301,11 +313,13 @@ class Body:
         with self.lock:
             state = self.state
             command = self.active
+            if command is None and self._at_rest():
+                return  # nothing moves: skip the world queries (an idle server stays cheap)
             if command is not None and command.start_ns is not None and now_ns is not None:
                 dt = min(dt, (now_ns - command.start_ns) / 1e9)
                 if dt <= 0:
                     return
-            ground_z = self.ground(state.position)
+            ground_z = self.ground(state.position) if command is not None else 0.0
             motion = None
             step = dt  # the part of this tick the command's motion lasts
             if command is not None:
@@ -323,9 +337,12 @@ class Body:
             velocity = motion.velocity if motion is not None else np.zeros(3)
             yaw_rate = motion.yaw_rate if motion is not None else 0.0
             new_position = state.position + velocity * step
-            new_position[2] = min(new_position[2], self.ground(new_position))
-            if blocked is not None and blocked(state.position, new_position):
-                new_position = state.position.copy()
+            if np.any(new_position != state.position):
+                # the surface below the new x, y as seen from the higher of the old and new heights
+                probe = np.array([new_position[0], new_position[1], min(new_position[2], state.position[2])])
+                new_position[2] = min(new_position[2], self.ground(probe))
+                if blocked is not None and blocked(state.position, new_position):
+                    new_position = state.position.copy()
             actual_velocity = (new_position - state.position) / dt
             angular = np.array([0.0, 0.0, yaw_rate])
             state.linear_acceleration = (actual_velocity - state.linear_velocity) / dt

@@ -178,4 +178,4 @@ class SimServer:
                 LOG.exception("sensor step failed")
                 self._stopping.wait(0.1)
             if not worked:
-                self._stopping.wait(0.002)
+                self._stopping.wait(0.005)

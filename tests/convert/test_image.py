@@ -184,3 +184,22 @@ def test_big_endian_float16_full_frame_matches_little_endian():
     little = image(sim_image("16FC1", depth.tobytes(), 32, 16), CTX)
     big = image(sim_image("16FC1", depth.astype(">f2").tobytes(), 32, 16, big_endian=True), CTX)
     assert big.data == little.data
+
+
+def test_the_simulators_camera_info_on_the_disparity_image_topic_is_skipped_not_an_error():
+    from airsim_mapper.convert.camera_info import camera_info
+    from airsim_mapper.convert.context import ConvertContext
+    from airsim_mapper.convert.image import image
+
+    sim_info = {
+        "width": 320,
+        "height": 240,
+        "distortion_model": "",
+        "distortion_params": [0.0] * 5,
+        "intrinsic_camera_matrix": [160.0, 0, 160, 0, 160, 120, 0, 0, 1],
+        "rectification_matrix": [1.0, 0, 0, 0, 1, 0, 0, 0, 1],
+        "projection_matrix": [1.0] + [0.0] * 11,
+    }
+    ctx = ConvertContext(source={"fov-degrees": 90})
+    assert image(sim_info, ctx) is None
+    assert camera_info(sim_info, ctx) is None

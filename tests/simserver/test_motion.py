@@ -145,3 +145,13 @@ def test_kinematic_copies_are_independent():
     copy = kin.copy()
     copy.position[0] = 1.0
     assert kin.position[0] == 0.0
+
+
+def test_a_fast_descent_stops_on_a_raised_surface_even_with_one_long_tick():
+    def pad(position: np.ndarray) -> float:
+        return -0.5 if position[2] <= -0.5 else 0.0  # a 0.5 m platform seen only from above
+
+    body = Body(np.array([0.0, 0.0, -1.0]), IDENTITY_Q, pad)
+    body.run(Velocity([0.0, 0.0, 20.0], 1.0, YawMode()))
+    body.tick(0.1)
+    assert body.state.position[2] == -0.5

@@ -1,0 +1,127 @@
+"""/diagnostics: one DiagnosticStatus per bridge (rate, drops, stamp age, errors) and one for the simulator
+connection, published once a second. Names are the bridges' names, the same ones validate-mapping prints."""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from airsim_mapper.engine.bridges import Bridge, SimToRos
+
+log = logging.getLogger("rosout.airsim_mapper.diagnostics")
+OK, WARN, ERROR = 0, 1, 2
+STALE_AFTER_S = 3.0
+
+
+@dataclass
+class _Seen:
+    messages: int = 0
+    errors: int = 0
+    time: float = 0.0
+
+
+def bridge_status(bridge: Bridge, seen: _Seen, now: float, drops: int, prefix: str) -> dict[str, Any]:
+    """A plain-value status of one bridge since the last report (pure, for testing)."""
+    stats = bridge.stats
+    dt = max(now - seen.time, 1e-6) if seen.time else 0.0
+    rate = (stats.messages - seen.messages) / dt if dt else 0.0
+    new_errors = stats.errors - seen.errors
+    attached = getattr(bridge, "_attached", None)
+    age = now - stats.last_time if stats.last_time else None
+    if new_errors:
+        level, message = ERROR, f"{new_errors} errors: {stats.last_error}"
+    elif attached and (age is None or age > STALE_AFTER_S):
+        level, message = WARN, "no data from the simulator" if age is None else f"stale for {age:.1f} s"
+    elif attached is False and isinstance(bridge, SimToRos):
+        level, message = OK, "idle (no subscribers)"
+    else:
+        level, message = OK, "ok"
+    spec = bridge.spec
+    values = {
+        "direction": spec.direction,
+        "sim": spec.sim or "",
+        "ros": spec.ros or "",
+        "rate_hz": f"{rate:.2f}",
+        "messages": str(stats.messages),
+        "errors": str(stats.errors),
+        "drops": str(drops),
+        "last_message_age_s": "" if age is None else f"{age:.3f}",
+    }
+    return {"name": f"{prefix}{spec.name}", "level": level, "message": message, "values": values}
+
+
+class Diagnostics:
+    """Publishes the engine's bridge statistics on /diagnostics until stopped."""
+
+    def __init__(self, engine: Any, node_name: str, period_s: float = 1.0) -> None:
+        import rospy
+        from diagnostic_msgs.msg import DiagnosticArray
+
+        self.engine = engine
+        self.prefix = f"{node_name}: "
+        self.period_s = period_s
+        self.publisher = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=1)
+        self._seen: dict[str, _Seen] = {}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="diagnostics", daemon=True)
+        self._thread.start()
+
+    def statuses(self, now: float) -> list[dict[str, Any]]:
+        streams = self.engine.hub.streams()
+        out = [self.connection_status()]
+        seen_now: dict[str, _Seen] = {}
+        for name, bridge in list(self.engine.bridges.items()):
+            topic = getattr(bridge, "topic", None)
+            drops = streams[topic].stats.dropped if topic in streams else 0
+            seen = self._seen.get(name, _Seen())
+            out.append(bridge_status(bridge, seen, now, drops, self.prefix))
+            seen_now[name] = _Seen(bridge.stats.messages, bridge.stats.errors, now)
+        self._seen = seen_now
+        return out
+
+    def connection_status(self) -> dict[str, Any]:
+        connected = getattr(self.engine, "connected", True)
+        scene = self.engine.scene
+        return {
+            "name": f"{self.prefix}simulator",
+            "level": OK if connected else ERROR,
+            "message": "connected" if connected else "simulator connection lost",
+            "values": {
+                "scene": scene.name if scene else "",
+                "scene_file": scene.file if scene else "",
+                "bridges": str(len(self.engine.bridges)),
+            },
+        }
+
+    def publish(self) -> None:
+        import rospy
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        array = DiagnosticArray()
+        array.header.stamp = rospy.Time.now()
+        for status in self.statuses(time.monotonic()):
+            array.status.append(
+                DiagnosticStatus(
+                    level=status["level"],
+                    name=status["name"],
+                    message=status["message"],
+                    hardware_id="projectairsim",
+                    values=[KeyValue(key=k, value=v) for k, v in status["values"].items()],
+                )
+            )
+        self.publisher.publish(array)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.period_s):
+            try:
+                self.publish()
+            except Exception as exc:  # never take the node down for a report
+                log.warning("diagnostics: %s", exc)
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2)
+        self.publisher.unregister()
