@@ -76,3 +76,16 @@ def camera_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     mount_position, mount_q = camera_mount(ctx)
     position, q = compose(robot_position, robot_q, mount_position, mount_q)
     return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
+
+
+@sim_fields.converter("camera_optical_pose")
+def camera_optical_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
+    """As camera_pose, then turned into the camera's optical frame (z forward, x right, y down)."""
+    robot_position, robot_q = sim_fields.pose(msg)
+    mount_position, mount_q = camera_mount(ctx)
+    position, q = compose(robot_position, robot_q, mount_position, mount_q)
+    if ctx.enu:
+        position, q = frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q)
+    return PoseStamped(
+        header=header(msg, ctx), pose=ros_pose(position, frames.body_to_optical(q, ctx.convention))
+    )

@@ -4,6 +4,7 @@ Order: rules in file order; within a rule, scene elements in scene order (robots
 capture settings). Domains:
 - node: once, named `<rule>[<node_name>]`; scene: once, `<rule>[<scene_name>]`;
 - robot: per robot, `<rule>[<robot>]`, source = the actor entry (name, origin, ...) without its robot-config;
+- first_robot: once per scene with a robot, for the first robot, `<rule>[<scene_name>]`, source as robot;
 - camera: per enabled camera, `<rule>[<robot>/<camera>]`, source = the camera's sensor config;
 - camera_capture: per capture-enabled setting of an enabled camera, `<rule>[<robot>/<camera>/<image_type>]`,
   source = the capture setting plus the camera mount under "camera_origin";
@@ -107,6 +108,9 @@ def elements(
         yield scene.name, base, {"scene_name": scene.name, "file": scene.file}
     elif rule.domain == "robot":
         yield from _robot_elements(scene, base)
+    elif rule.domain == "first_robot":
+        for _, variables, source in list(_robot_elements(scene, base))[:1]:
+            yield scene.name, variables, source
     elif rule.domain == "camera_capture":
         yield from _capture_elements(scene, base, mapping.image_types)
     elif rule.domain == "streaming_camera":

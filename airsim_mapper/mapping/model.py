@@ -18,6 +18,8 @@ DOMAIN_VARIABLES: dict[str, tuple[str, ...]] = {
     "node": ("node_name", "namespace"),
     "scene": ("node_name", "namespace", "scene_name"),
     "robot": ("node_name", "namespace", "scene_name", "robot_name"),
+    # once per scene, for its first robot (scene order): one stream per scene, e.g. /clock
+    "first_robot": ("node_name", "namespace", "scene_name", "robot_name"),
     "camera": ("node_name", "namespace", "scene_name", "robot_name", "camera_name"),
     "camera_capture": (
         "node_name",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -52,8 +53,10 @@ def rig(rig_factory) -> Rig:
 
 
 @pytest.fixture(scope="module")
-def pose(rig: Rig) -> PoseWatch:
-    return PoseWatch()
+def pose(rig: Rig) -> Iterator[PoseWatch]:
+    watch = PoseWatch()
+    yield watch
+    watch.sub.unregister()  # a lingering subscriber would keep later modules' dead publishers' latches
 
 
 def publisher(topic: str, cls):

@@ -33,6 +33,16 @@ EXPECTED_PUBLISHED = {
     f"{ROBOT}/radar1/radar_tracks": "radar_msgs/RadarTracks",
     "/airsim_streaming_camera/image_raw": "sensor_msgs/Image",
     "/tf": "tf2_msgs/TFMessage",
+    "/clock": "rosgraph_msgs/Clock",
+    f"{ROBOT}/odom": "nav_msgs/Odometry",
+    f"{ROBOT}/collision": "geometry_msgs/PointStamped",
+    f"{ROBOT}/IMU1/imu": "sensor_msgs/Imu",
+    f"{ROBOT}/GPS/gps": "sensor_msgs/NavSatFix",
+    f"{ROBOT}/Barometer/barometer": "sensor_msgs/FluidPressure",
+    f"{ROBOT}/Magnetometer/magnetometer": "sensor_msgs/MagneticField",
+    f"{ROBOT}/DistanceSensor/distance": "sensor_msgs/Range",
+    f"{ROBOT}/Battery/battery": "sensor_msgs/BatteryState",
+    f"{ROBOT}/Airspeed/airspeed": "sensor_msgs/FluidPressure",
 }
 EXPECTED_SUBSCRIBED = {
     "/ProjectAirSim/node/sensors_bridge/load_scene": "std_msgs/String",
@@ -50,7 +60,7 @@ def rig(rig_factory) -> Rig:
         "--scene",
         "scene_drone_sensors.jsonc",
         node_name="sensors_bridge",
-        wait_for=f"{ROBOT}/radar1/radar_tracks",
+        wait_for=f"{ROBOT}/Airspeed/airspeed",  # the last topic the mapping makes
     )
     return rig
 

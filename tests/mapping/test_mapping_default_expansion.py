@@ -12,6 +12,38 @@ from airsim_mapper.scene import read_scene
 DEFAULT = ROOT / "mappings" / "default.yaml"
 LOAD_SCENE = "/ProjectAirSim/node/projectairsim/load_scene"
 STREAMING = ["/airsim_streaming_camera/image_raw", "/airsim_streaming_camera/switch_view"]
+SCENE_WIDE = ["/clock", "/airsim_node/pause", "/airsim_node/step"]
+ROBOT_SERVICES = (
+    "takeoff",
+    "land",
+    "hover",
+    "arm",
+    "disarm",
+    "enable_api_control",
+    "disable_api_control",
+    "reset",
+)
+
+
+def _robot_extras(robot: str) -> list[str]:
+    """Odometry, collisions and the control services every robot gets."""
+    base = f"/airsim_node/{robot}"
+    return [f"{base}/odom", f"{base}/collision", *(f"{base}/{name}" for name in ROBOT_SERVICES)]
+
+
+def _instruments(robot: str) -> list[str]:
+    """robot_quadrotor_fastphysics_sensors.jsonc's instruments, one topic each."""
+    base = f"/airsim_node/{robot}"
+    return [
+        f"{base}/IMU1/imu",
+        f"{base}/GPS/gps",
+        f"{base}/Barometer/barometer",
+        f"{base}/Magnetometer/magnetometer",
+        f"{base}/DistanceSensor/distance",
+        f"{base}/Battery/battery",
+        f"{base}/Airspeed/airspeed",
+    ]
+
 
 # scene_drone_sensors.jsonc, written out in full from the seed's topic list.
 DRONE_SENSORS_TOPICS = [
@@ -40,6 +72,8 @@ DRONE_SENSORS_TOPICS = [
     "/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info",
     "/airsim_node/Drone1/DownCamera/surface_normals/camera_info",
     "/airsim_node/Drone1/lidar1/lidar",
+    *_robot_extras("Drone1"),
+    *_instruments("Drone1"),
     *STREAMING,
 ]
 
@@ -60,30 +94,36 @@ def _basic_drone(robot: str) -> list[str]:
         f"/airsim_node/{robot}/Chase/scene_camera/camera_info",
         f"/airsim_node/{robot}/DownCamera/scene_camera/camera_info",
         f"/airsim_node/{robot}/DownCamera/depth_camera/camera_info",
+        f"/airsim_node/{robot}/IMU1/imu",
+        *_robot_extras(robot),
     ]
 
 
 EXPECTED = {
-    "scene_basic_drone.jsonc": [LOAD_SCENE, *_basic_drone("Drone1"), *STREAMING],
-    "scene_drone_sensors.jsonc": DRONE_SENSORS_TOPICS,
+    "scene_basic_drone.jsonc": [LOAD_SCENE, *SCENE_WIDE, *_basic_drone("Drone1"), *STREAMING],
+    "scene_drone_sensors.jsonc": [*SCENE_WIDE, *DRONE_SENSORS_TOPICS],
     "scene_lidar_drone.jsonc": [
         LOAD_SCENE,
+        *SCENE_WIDE,
         *_basic_drone("Drone1"),
         "/airsim_node/Drone1/lidar1/lidar",
         *STREAMING,
     ],
     "scene_radar_tower.jsonc": [
         LOAD_SCENE,
+        *SCENE_WIDE,
         *_basic_drone("Drone1"),
         "/airsim_node/RadarTower1/actual_pose",
         "/airsim_node/RadarTower1/cmd_vel",
         "/airsim_node/RadarTower1/desired_pose",
         "/airsim_node/RadarTower1/radar1/radar_detections",
         "/airsim_node/RadarTower1/radar1/radar_tracks",
+        *_robot_extras("RadarTower1"),
         *STREAMING,
     ],
     "scene_two_drones_sensors.jsonc": [
         LOAD_SCENE,
+        *SCENE_WIDE,
         *_basic_drone("Drone1"),
         *[topic.replace("Drone1", "Drone2") for topic in DRONE_SENSORS_TOPICS[1:-2]],
         *STREAMING,

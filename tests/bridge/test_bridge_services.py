@@ -1,0 +1,160 @@
+"""Control services of the default mapping, end to end: takeoff, land, hover, arm, disarm, api control,
+reset to the scene origin, pause/step/resume of the sim clock, and collisions reported on the way."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+from bridgeharness import Rig
+from harness import wait_until
+
+ROBOT = "/airsim_node/Drone1"
+STEP_NS = 3_000_000  # the scene's clock step-ns
+ROBOT_SERVICES = (
+    "takeoff",
+    "land",
+    "hover",
+    "arm",
+    "disarm",
+    "enable_api_control",
+    "disable_api_control",
+    "reset",
+)
+
+
+@pytest.fixture(scope="module")
+def rig(rig_factory) -> Rig:
+    rig = rig_factory()
+    rig.start_node(
+        "--scene", "scene_drone_sensors.jsonc", node_name="srv_bridge", wait_for=f"{ROBOT}/actual_pose"
+    )
+    return rig
+
+
+class PoseWatch:
+    """The latest actual_pose position (NED)."""
+
+    def __init__(self) -> None:
+        import rospy
+        from geometry_msgs.msg import PoseStamped
+
+        self.position: np.ndarray | None = None
+        self.sub = rospy.Subscriber(f"{ROBOT}/actual_pose", PoseStamped, self._on_pose, queue_size=1)
+        wait_until(lambda: self.position is not None, 20, what="a pose")
+
+    def _on_pose(self, msg) -> None:
+        p = msg.pose.position
+        self.position = np.array([p.x, p.y, p.z])
+
+
+@pytest.fixture(scope="module")
+def pose(rig: Rig) -> Iterator[PoseWatch]:
+    watch = PoseWatch()
+    yield watch
+    watch.sub.unregister()
+
+
+def call(name: str, *args):
+    import rospy
+    from std_srvs.srv import SetBool, Trigger
+
+    rospy.wait_for_service(name, timeout=20)
+    return rospy.ServiceProxy(name, SetBool if name.endswith("/pause") else Trigger)(*args)
+
+
+def clock_ns() -> int:
+    import rospy
+    from rosgraph_msgs.msg import Clock
+
+    return rospy.wait_for_message("/clock", Clock, timeout=10).clock.to_nsec()
+
+
+def test_every_control_service_is_advertised_with_its_type(rig: Rig):
+    import rosgraph
+    import rosservice
+
+    names = [f"{ROBOT}/{name}" for name in ROBOT_SERVICES] + ["/airsim_node/pause", "/airsim_node/step"]
+    for name in names:
+        call_type = "std_srvs/SetBool" if name.endswith("/pause") else "std_srvs/Trigger"
+        wait_until(lambda n=name: rosservice.get_service_type(n) is not None, 20, what=name)
+        assert rosservice.get_service_type(name) == call_type
+    _pubs, _subs, services = rosgraph.Master("/probe").getSystemState()
+    ours = {name for name, nodes in services if "/srv_bridge" in nodes}
+    assert set(names) <= ours
+
+
+def test_api_control_and_arming_services_succeed(rig: Rig):
+    for name in ("enable_api_control", "arm", "disarm", "disable_api_control", "enable_api_control", "arm"):
+        reply = call(f"{ROBOT}/{name}")
+        assert (reply.success, reply.message) == (True, ""), name
+
+
+def test_land_brings_the_drone_to_the_ground_and_takeoff_lifts_it(rig: Rig, pose: PoseWatch):
+    reply = call(f"{ROBOT}/land")
+    assert reply.success
+    assert pose.position[2] == pytest.approx(0.0, abs=0.2)  # landed: NED z near 0
+    reply = call(f"{ROBOT}/takeoff")
+    assert reply.success
+    wait_until(lambda: pose.position[2] < -2.5, 5, what="the drone to rise")
+    assert call(f"{ROBOT}/hover").success
+    time.sleep(0.3)
+    held = pose.position.copy()
+    time.sleep(0.3)
+    assert pose.position == pytest.approx(held, abs=0.05)
+
+
+def test_flying_into_a_block_reports_the_collision_and_reset_returns_to_the_origin(rig: Rig, pose: PoseWatch):
+    import rospy
+    from geometry_msgs.msg import PointStamped, PoseStamped, Twist
+
+    hits: list[PointStamped] = []
+    sub = rospy.Subscriber(f"{ROBOT}/collision", PointStamped, hits.append, queue_size=10)
+    teleport = rospy.Publisher(f"{ROBOT}/desired_pose", PoseStamped, queue_size=1)
+    velocity = rospy.Publisher(f"{ROBOT}/cmd_vel", Twist, queue_size=1)
+    wait_until(lambda: teleport.get_num_connections() and velocity.get_num_connections(), 20, what="links")
+    wait_until(lambda: sub.get_num_connections() > 0, 20, what="the collision topic")
+    target = PoseStamped()
+    target.header.frame_id = "map"
+    target.pose.position.x, target.pose.position.z, target.pose.orientation.w = 25.0, -4.0, 1.0
+    teleport.publish(target)  # 3 m short of BlockNorth's south face (x = 28), facing it
+    wait_until(lambda: np.allclose(pose.position, [25.0, 0.0, -4.0], atol=0.05), 10, what="the teleport")
+    forward = Twist()
+    forward.linear.x = 3.0
+    deadline = time.monotonic() + 10
+    while not hits and time.monotonic() < deadline:
+        velocity.publish(forward)
+        time.sleep(0.1)
+    sub.unregister()
+    assert hits, "no collision reported"
+    hit = hits[0]
+    assert hit.header.frame_id == "map"
+    assert (hit.point.x, hit.point.y, hit.point.z) == pytest.approx((28.0, 0.0, -4.0), abs=0.3)
+    assert pose.position[0] < 28.0  # the block stopped the drone
+    reply = call(f"{ROBOT}/reset")
+    assert reply.success
+    wait_until(lambda: np.allclose(pose.position, [0.0, 0.0, -4.0], atol=0.05), 10, what="the reset")
+    teleport.unregister()
+    velocity.unregister()
+
+
+def test_pause_stops_sim_time_step_advances_one_step_and_resume_runs_it_again(rig: Rig):
+    reply = call("/airsim_node/pause", True)
+    try:
+        assert reply.success and reply.message.startswith("Sim time paused at t = ")
+        paused_at = int(reply.message.rsplit(" ", 1)[1])
+        time.sleep(0.3)
+        assert clock_ns() == paused_at
+        stepped = call("/airsim_node/step")
+        assert stepped.success and int(stepped.message) == paused_at + STEP_NS
+        wait_until(lambda: clock_ns() == paused_at + STEP_NS, 5, what="/clock to show the step")
+        time.sleep(0.2)
+        assert clock_ns() == paused_at + STEP_NS  # paused again after the step
+    finally:
+        resumed = call("/airsim_node/pause", False)
+    assert resumed.success and resumed.message.startswith("Sim time resumed from t = ")
+    before = clock_ns()
+    time.sleep(0.2)
+    assert clock_ns() - before > 100_000_000
