@@ -3,17 +3,28 @@
 Call `rospy.init_node` first. The wrapper either creates its own client (kept in `projectairsim_client`
 and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
 a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow.
+
+Reliability: a wrapper that made its client (or was given a `client_factory`) reconnects by itself when
+the simulator restarts and reloads the last scene; with a client supplied by the mission script it only
+reports "stale" on `/airsim_mapper/<node>/status`. A restarted ROS master is noticed and the node's
+topics and services are registered with it again (engine/reregister.py).
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import rospy
 
+from airsim_mapper.engine.diagnostics import Diagnostics
 from airsim_mapper.engine.engine import Engine
+from airsim_mapper.engine.health import open_client
+from airsim_mapper.engine.reregister import MasterWatch
+from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import Mapping
 from airsim_mapper.scene import Scene, scene_from_config
@@ -59,23 +70,30 @@ class ProjectAirSimWrapper:
         node_name: str | None = None,
         namespace: str = "",
         disconnect_on_shutdown: bool | None = None,
+        client_factory: Callable[[], Any] | None = None,
     ) -> None:
         redirect_client_log()
         self.mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
         self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown
         if client is None:
-            from projectairsim import ProjectAirSimClient
-
-            client = ProjectAirSimClient(address, topicsport, servicesport)
-            client.connect()
-        self.projectairsim_client = client
+            client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
+            client = client_factory()
         self.sim_config_path = str(sim_config_path)
         name = node_name if node_name is not None else rospy.get_name().lstrip("/")
-        self.engine = Engine(client, self.mapping, self.sim_config_path, name, namespace)
+        self.engine = Engine(
+            client, self.mapping, self.sim_config_path, name, namespace, client_factory=client_factory
+        )
+        self.master_watch = MasterWatch()
+        self.diagnostics = Diagnostics(self.engine, name)
         self._closed = False
         rospy.on_shutdown(self.shutdown)
         if scene:
             self.engine.load_scene(scene)
+
+    @property
+    def projectairsim_client(self) -> Any:
+        """The client in use (a new one after the wrapper reconnected to a restarted simulator)."""
+        return self.engine.client
 
     @property
     def bridges(self) -> list[Any]:
@@ -115,6 +133,12 @@ class ProjectAirSimWrapper:
         if self._closed:
             return
         self._closed = True
+        self.master_watch.stop()
+        self.diagnostics.stop()
+        lost = self.engine.sim.dead
         self.engine.shutdown()
         if self._owns_client:
-            self.projectairsim_client.disconnect()
+            if lost:  # nobody would answer the client's unsubscribe request
+                close_client(self.engine.client)
+            else:
+                self.engine.client.disconnect()

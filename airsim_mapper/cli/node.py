@@ -2,7 +2,9 @@
 
 Switches as the seed documents them (--address, --nodename, --simconfigpath, --servicesport,
 --topicsport), plus --mapping and --scene. An invalid mapping or scene stops the node with the
-validate-mapping errors and exit code 1, before anything connects.
+validate-mapping errors and exit code 1, before anything connects. A simulator that is not running yet
+is waited for (one log line per attempt; backoff 0.5 s, then 2 s, then 5 s); one that restarts
+later is reconnected to and the last scene reloaded, without restarting the node.
 """
 
 from __future__ import annotations
@@ -10,13 +12,14 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-import time
+from collections.abc import Callable
+from functools import partial
 from typing import Any
 
+from airsim_mapper.engine.health import Backoff, SimUnreachable, open_client
 from airsim_mapper.mapping.errors import ConfigError
 
 log = logging.getLogger("rosout.airsim_mapper.node")
-RETRY_MAX_S = 5.0
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -38,32 +41,29 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
-def connect(address: str, topicsport: int, servicesport: int, is_shutdown) -> Any:
-    """Connect to the simulator, retrying with backoff until it answers or ROS shuts down."""
-    from projectairsim import ProjectAirSimClient
+def connect(
+    address: str,
+    topicsport: int,
+    servicesport: int,
+    is_shutdown: Callable[[], bool],
+    sleep: Callable[[float], Any] | None = None,
+) -> Any:
+    """Connect to the simulator, retrying with backoff until it answers or ROS shuts down (then None)."""
+    import time
 
-    delay, attempt = 0.25, 0
+    sleep = sleep or time.sleep
+    backoff = Backoff()
     while not is_shutdown():
-        attempt += 1
-        client = ProjectAirSimClient(address, topicsport, servicesport)
         try:
-            client.connect()
-            return client
-        except Exception as exc:
-            for sock in (client.socket_topics, client.socket_services):
-                if sock is not None:
-                    sock.close()
-            log.warning(
-                "simulator at %s:%d/%d not reachable (%s); retry %d in %.1f s",
-                address,
-                topicsport,
-                servicesport,
-                type(exc).__name__,
-                attempt,
-                delay,
-            )
-            time.sleep(delay)
-            delay = min(delay * 2, RETRY_MAX_S)
+            client = open_client(address, topicsport, servicesport)
+        except SimUnreachable as exc:
+            delay = backoff.next_delay()
+            log.warning("%s; waiting for it: attempt %d, next in %.1f s", exc, backoff.attempt, delay)
+            sleep(delay)
+            continue
+        if backoff.attempt:
+            log.info("simulator at %s:%d/%d answered", address, topicsport, servicesport)
+        return client
     return None
 
 
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except OSError as exc:
         print(f"{args.mapping}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        return 1
 
     rospy.init_node(node_name, anonymous=args.nodename is None)
     from airsim_mapper.wrapper import ProjectAirSimWrapper, redirect_client_log
@@ -102,6 +102,7 @@ def main(argv: list[str] | None = None) -> int:
         node_name=rospy.get_name().lstrip("/"),
         namespace=args.namespace,
         disconnect_on_shutdown=True,  # this node made the client
+        client_factory=partial(open_client, args.address, args.topicsport, args.servicesport),
     )
     try:
         if args.scene:
@@ -109,6 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as exc:
         print(str(exc), file=sys.stderr)
         rospy.signal_shutdown("invalid scene")
+        return 1
+    except Exception as exc:  # the simulator refused the scene: say why, without a traceback
+        print(f"{args.scene}: the simulator could not load it: {type(exc).__name__}: {exc}", file=sys.stderr)
+        rospy.signal_shutdown("scene not loaded")
         return 1
     log.info("bridges:\n%s", format_table(wrapper.bridges))
     rospy.spin()

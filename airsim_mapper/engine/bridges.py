@@ -175,7 +175,11 @@ class SimToRos(Bridge):
             self.stats.last_stamp = header.stamp
         if self.spec.tf is None:
             return None
-        return [self._transform(out, message)]
+        try:
+            return [self._transform(out, message)]
+        except (ConversionError, KeyError, TypeError, AttributeError) as exc:  # no usable pose in it
+            self.fail(f"no transform from a message on {self.topic}: {type(exc).__name__}: {exc}")
+            return None
 
     def _transform(self, out: Any, message: Any) -> Any:
         tf = self.spec.tf

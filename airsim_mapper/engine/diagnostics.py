@@ -83,13 +83,16 @@ class Diagnostics:
         return out
 
     def connection_status(self) -> dict[str, Any]:
-        connected = getattr(self.engine, "connected", True)
+        state = getattr(self.engine, "state", "connected")
+        reason = getattr(self.engine, "reason", "")
         scene = self.engine.scene
+        level = OK if state == "connected" else ERROR
         return {
             "name": f"{self.prefix}simulator",
-            "level": OK if connected else ERROR,
-            "message": "connected" if connected else "simulator connection lost",
+            "level": level,
+            "message": state if not reason else f"{state}: {reason}",
             "values": {
+                "state": state,
                 "scene": scene.name if scene else "",
                 "scene_file": scene.file if scene else "",
                 "bridges": str(len(self.engine.bridges)),

@@ -44,6 +44,13 @@ class StreamHub:
         with self._lock:
             return dict(self._streams)
 
+    def rebind(self, sim: SimLink) -> None:
+        """Move every stream to a new sim link (after a reconnect): same streams, subscribed anew."""
+        with self._lock:
+            self._sim = sim
+            for topic, stream in self._streams.items():
+                sim.subscribe(topic, stream.offer)
+
     def drop_all(self) -> None:
         """Forget every stream without telling the server (its subscriptions are already gone)."""
         with self._lock:

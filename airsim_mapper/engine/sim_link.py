@@ -7,24 +7,41 @@
   `request_async` (whose error handler disconnects the client): each call gets its own NNG context on one
   asyncio loop owned by this link, so a long motion command never blocks other requests.
 - Callbacks run on the client's receive thread; they must only hand messages over (see streams.py).
+- Receiving: the client's own receive loop ends for good on the first undecodable frame (and a callback
+  error kills it). The link runs its own loop on the client's socket instead (`_receive`, the same
+  dispatch): a malformed frame is dropped, counted in `bad_frames` and reported at most every 5 s.
+- Liveness: the link notices when the topics connection drops (an NNG pipe removal: the server died or
+  restarted) and offers a cheap `probe`. A link marked dead answers every call at once with SimLinkError
+  instead of waiting on sockets that will never answer (see health.py and Engine's reconnect).
 """
 
 from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import contextlib
 import logging
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
+PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
+WARN_PERIOD_S = 5.0
 
 
 class SimLinkError(RuntimeError):
     """A simulator request failed."""
+
+
+class SimLinkDead(SimLinkError):
+    """The link lost its simulator; nothing is sent until the engine reconnects."""
+
+    def __init__(self, what: str) -> None:
+        super().__init__(f"{what}: the simulator connection is lost")
 
 
 class SimLink:
@@ -37,13 +54,102 @@ class SimLink:
         self._loop = asyncio.new_event_loop()
         self._loop_thread = threading.Thread(target=self._run_loop, name="sim-requests", daemon=True)
         self._loop_thread.start()
+        self.dropped = threading.Event()  # the topics connection dropped at least once
+        self.dead = False
+        self._watched = getattr(client, "socket_topics", None)
+        if self._watched is not None:
+            self._watched.add_post_pipe_remove_cb(self._on_pipe_removed)
+        self.bad_frames = 0
+        self._last_warning = -1e9
+        self._unreported = 0
+        self.ensure_receiver()
+
+    # --- receiving --------------------------------------------------------------------------
+    def ensure_receiver(self) -> bool:
+        """Run our receive loop on the client unless a live one runs already; True if one was started."""
+        client = self.client
+        thread = getattr(client, "recv_topic_thread", None)
+        if self.dead or client.socket_topics is None or (thread is not None and thread.is_alive()):
+            return False
+        if thread is not None and not client.state:
+            return False  # disconnected on purpose
+        client.socket_topics.recv_timeout = 100  # bounded block so the loop sees `state` change
+        client.recv_topic_thread = threading.Thread(target=self._receive, name="sim-receive", daemon=True)
+        client.recv_topic_thread.start()
+        if thread is not None:
+            self._bad_frame("the client's receive loop had stopped; receiving again")
+        return True
+
+    def _receive(self) -> None:
+        import msgpack
+        import pynng
+
+        client, sock = self.client, self.client.socket_topics
+        while client.state:
+            try:
+                packed = sock.recv()
+            except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
+                continue
+            except pynng.exceptions.Closed:
+                return
+            except pynng.exceptions.NNGException as exc:
+                self._bad_frame(f"receive failed: {exc}")
+                continue
+            try:
+                frame = msgpack.unpackb(packed, raw=True)
+                topic = frame[1].decode("utf-8")
+                entry = client.subs.get(topic)
+                if entry is None:
+                    continue
+                message = msgpack.unpackb(frame[2], raw=False)
+            except Exception as exc:
+                self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
+                continue
+            info = client.topics.get(topic) or _unknown_topic(topic)
+            for callback in entry["callbacks"]:
+                try:
+                    callback(info, message)
+                except Exception as exc:
+                    self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
+
+    def _bad_frame(self, message: str) -> None:
+        self.bad_frames += 1
+        now = time.monotonic()
+        if now - self._last_warning < WARN_PERIOD_S:
+            self._unreported += 1
+            return
+        extra = f" ({self._unreported} more since last report)" if self._unreported else ""
+        self._last_warning, self._unreported = now, 0
+        log.warning("%s%s", message, extra)
+
+    # --- liveness ---------------------------------------------------------------------------
+    def _on_pipe_removed(self, _pipe: Any) -> None:
+        """NNG callback thread: the server closed the topics connection (died, restarted, or dropped us)."""
+        self.dropped.set()
+
+    def connected(self) -> bool:
+        """The topics connection never dropped since this link was made."""
+        return not self.dead and not self.dropped.is_set()
+
+    def probe(self, timeout: float) -> bool:
+        """One cheap request: did the server answer within `timeout` seconds?"""
+        try:
+            self.call(PROBE_METHOD, {}, timeout=timeout)
+        except SimLinkError:
+            return False
+        return True
+
+    def mark_dead(self) -> None:
+        """From now on every call fails at once; subscriptions are only remembered."""
+        self.dead = True
 
     # --- topics -----------------------------------------------------------------------------
     def subscribe(self, topic: str, callback: TopicCallback) -> None:
         """Add a callback for a sim topic; the client sends SUBSCRIBE (and the server its cached value)."""
         with self._lock:
             self._ours.setdefault(topic, []).append(callback)
-            self.client.subscribe(topic, callback)
+            if not self.dead:
+                self.client.subscribe(topic, callback)
 
     def unsubscribe(self, topic: str, callback: TopicCallback) -> None:
         """Remove one of our callbacks; unsubscribe on the server only when nobody else listens."""
@@ -53,6 +159,8 @@ class SimLink:
                 ours.remove(callback)
             if not ours:
                 self._ours.pop(topic, None)
+            if self.dead:
+                return
             entry = self.client.subs.get(topic)
             if entry is None:
                 return
@@ -89,11 +197,17 @@ class SimLink:
             self._ours.clear()
 
     def publish(self, topic: str, message: dict) -> None:
+        if self.dead:
+            raise SimLinkDead(topic)
         self.client.publish(topic, message)
 
     # --- services ---------------------------------------------------------------------------
     def call_async(self, method: str, params: dict) -> concurrent.futures.Future:
         """Send a request on its own NNG context; the future resolves with the decoded result."""
+        if self.dead:
+            failed: concurrent.futures.Future = concurrent.futures.Future()
+            failed.set_exception(SimLinkDead(method))
+            return failed
         return asyncio.run_coroutine_threadsafe(self._request(method, params), self._loop)
 
     def call(self, method: str, params: dict, timeout: float = 30.0) -> Any:
@@ -129,15 +243,55 @@ class SimLink:
         asyncio.set_event_loop(self._loop)
         self._loop.run_forever()
 
+    def stop_loop(self) -> None:
+        """Stop the request loop thread (pending requests are abandoned)."""
+        if self._watched is not None:
+            with contextlib.suppress(ValueError):
+                self._watched.remove_post_pipe_remove_cb(self._on_pipe_removed)
+        self._loop.call_soon_threadsafe(self._loop.stop)
+        if threading.current_thread() is not self._loop_thread:
+            self._loop_thread.join(timeout=5)
+
+    def abandon(self) -> None:
+        """The simulator is gone: fail every call from now on, close the client's sockets, stop the loop.
+
+        The client is closed without the usual unsubscribe request (nobody would answer it), and before a
+        restarted server can be re-dialled by NNG: its single topics connection belongs to the new client.
+        """
+        self.mark_dead()
+        close_client(self.client)
+        self.stop_loop()
+
     def close(self) -> None:
         """Remove every callback of ours from the client, then stop the request loop."""
+        if self.dead:
+            self.stop_loop()
+            return
         with self._lock:
             topics = list(self._ours.items())
         for topic, callbacks in topics:
             for cb in list(callbacks):
                 self.unsubscribe(topic, cb)
-        self._loop.call_soon_threadsafe(self._loop.stop)
-        self._loop_thread.join(timeout=5)
+        self.stop_loop()
+
+
+def _unknown_topic(topic: str) -> Any:
+    from projectairsim.types import ProjectAirSimTopic
+
+    return ProjectAirSimTopic(topic, "unknown", "unknown", 0)
+
+
+def close_client(client: Any) -> None:
+    """Close a client's sockets at once, without talking to the server; joins its receive thread."""
+    client.state = False  # ends the receive loop within its 100 ms receive timeout
+    thread = getattr(client, "recv_topic_thread", None)
+    if thread is not None and thread.is_alive() and thread is not threading.current_thread():
+        thread.join(timeout=2)
+    for name in ("socket_topics", "socket_services"):
+        sock = getattr(client, name, None)
+        if sock is not None:
+            with contextlib.suppress(Exception):
+                sock.close()
 
 
 def _subscribe_frame(topic: str) -> bytes:

@@ -43,6 +43,8 @@ EXPECTED_PUBLISHED = {
     f"{ROBOT}/DistanceSensor/distance": "sensor_msgs/Range",
     f"{ROBOT}/Battery/battery": "sensor_msgs/BatteryState",
     f"{ROBOT}/Airspeed/airspeed": "sensor_msgs/FluidPressure",
+    "/diagnostics": "diagnostic_msgs/DiagnosticArray",
+    "/airsim_mapper/sensors_bridge/status": "std_msgs/String",
 }
 EXPECTED_SUBSCRIBED = {
     "/ProjectAirSim/node/sensors_bridge/load_scene": "std_msgs/String",
@@ -242,3 +244,32 @@ def test_streaming_camera_carries_the_chase_scene_image_and_switch_view_answers(
     rospy.wait_for_service("/airsim_streaming_camera/switch_view", timeout=10)
     reply = rospy.ServiceProxy("/airsim_streaming_camera/switch_view", Trigger)()
     assert reply.success
+
+
+def test_diagnostics_report_every_bridge_by_its_validate_mapping_name(rig: Rig):
+    import rospy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from sensor_msgs.msg import Image
+
+    # An image subscriber makes the lazy image bridge active, so its rate shows.
+    sub = rospy.Subscriber(f"{ROBOT}/DownCamera/scene_camera/image", Image, lambda m: None, queue_size=1)
+    try:
+        statuses = {}
+        for _ in range(4):
+            array = receive("/diagnostics", DiagnosticArray)
+            statuses = {s.name: s for s in array.status}
+        pose = statuses["sensors_bridge: actual_pose[Drone1]"]
+        values = {kv.key: kv.value for kv in pose.values}
+        assert pose.level == 0
+        assert float(values["rate_hz"]) > 20
+        assert values["ros"] == f"{ROBOT}/actual_pose"
+        image = statuses["sensors_bridge: camera_image[Drone1/DownCamera/scene_camera]"]
+        assert float({kv.key: kv.value for kv in image.values}["rate_hz"]) > 1
+        sim = statuses["sensors_bridge: simulator"]
+        assert sim.level == 0 and sim.message == "connected"
+        idle = statuses["sensors_bridge: camera_image[Drone1/Chase/scene_camera]"]
+        assert (
+            idle.message.startswith("idle") or float({kv.key: kv.value for kv in idle.values}["rate_hz"]) > 0
+        )
+    finally:
+        sub.unregister()

@@ -1,0 +1,96 @@
+"""Simulator liveness: opening a client, backoff between attempts, and deciding that a link is lost.
+
+A server that is killed or restarted closes its TCP connections, which NNG reports as a pipe removal on
+the topics socket: the link notices that at once (SimLink.connected). A server that hangs keeps its
+connections; `HealthCheck` then counts unanswered probes and calls the link lost after a few in a row.
+Probes are deliberately tolerant (1 s timeout, 3 misses) because a false "lost" makes the node reload
+the scene, which resets the simulation.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+PROBE_PERIOD_S = 0.5
+PROBE_TIMEOUT_S = 1.0
+PROBE_MISSES = 3
+RETRY_FIRST_S = 0.25
+RETRY_STEPS: tuple[tuple[int, float], ...] = (
+    (10, 0.5),  # the first ~5 s: a restarted server is found within half a second of listening
+    (30, 2.0),  # the next ~40 s
+    (1 << 30, 5.0),  # then one attempt (and one log line) per 5 s
+)
+
+
+class SimUnreachable(ConnectionError):
+    """No simulator answers at an address."""
+
+    def __init__(self, address: str, topicsport: int, servicesport: int, cause: BaseException) -> None:
+        super().__init__(
+            f"simulator at {address}:{topicsport}/{servicesport} not reachable ({type(cause).__name__})"
+        )
+
+
+class Probed(Protocol):
+    def connected(self) -> bool: ...
+
+    def probe(self, timeout: float) -> bool: ...
+
+
+def open_client(address: str, topicsport: int, servicesport: int) -> Any:
+    """A connected ProjectAirSimClient, or SimUnreachable (with the half-open sockets closed)."""
+    from projectairsim import ProjectAirSimClient
+
+    client = ProjectAirSimClient(address, topicsport, servicesport)
+    try:
+        client.connect()
+    except Exception as exc:
+        for sock in (client.socket_topics, client.socket_services):
+            if sock is not None:
+                with contextlib.suppress(Exception):
+                    sock.close()
+        raise SimUnreachable(address, topicsport, servicesport, exc) from None
+    return client
+
+
+@dataclass
+class Backoff:
+    """Delays between attempts: doubling from `first`, capped by the step the attempt count is in."""
+
+    first: float = RETRY_FIRST_S
+    steps: tuple[tuple[int, float], ...] = RETRY_STEPS
+    attempt: int = 0
+
+    def next_delay(self) -> float:
+        cap = next((cap for upto, cap in self.steps if self.attempt < upto), self.steps[-1][1])
+        delay = min(self.first * 2 ** min(self.attempt, 16), cap)
+        self.attempt += 1
+        return delay
+
+    def reset(self) -> None:
+        self.attempt = 0
+
+
+@dataclass
+class HealthCheck:
+    """Turns per-period observations of a link into a verdict: None (healthy) or why it is lost."""
+
+    misses_to_lose: int = PROBE_MISSES
+    probe_timeout: float = PROBE_TIMEOUT_S
+    misses: int = 0
+
+    def check(self, link: Probed) -> str | None:
+        if not link.connected():
+            return "the simulator closed the connection"
+        if link.probe(self.probe_timeout):
+            self.misses = 0
+            return None
+        self.misses += 1
+        if self.misses >= self.misses_to_lose:
+            return f"no answer to {self.misses} probes of {self.probe_timeout:g} s"
+        return None
+
+    def reset(self) -> None:
+        self.misses = 0

@@ -1,0 +1,121 @@
+"""Surviving a ROS master restart: rospy registers a node with the master only once, at start.
+
+A restarted master knows nothing of the node, so its topics and services go deaf for every peer that
+appears afterwards. `MasterWatch` polls the master's pid once a second; when it changes, `register_all`
+repeats what rospy's RegManager does at start-up: every publication, subscription and service of this
+process is registered again with the node's XML-RPC URI, and each subscription is told its current
+publishers (through the node's own `publisherUpdate`, exactly as the master would tell it).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import xmlrpc.client
+from collections.abc import Callable
+from dataclasses import dataclass
+
+log = logging.getLogger("rosout.airsim_mapper.master")
+POLL_PERIOD_S = 1.0
+MASTER_CALLER = "/master"
+
+
+class ReregisterError(RuntimeError):
+    """The master refused a registration."""
+
+    def __init__(self, kind: str, name: str, message: str) -> None:
+        super().__init__(f"the master refused to register {kind} {name}: {message}")
+
+
+@dataclass(frozen=True)
+class Registered:
+    publishers: int
+    subscribers: int
+    services: int
+
+    def __str__(self) -> str:
+        return f"{self.publishers} publishers, {self.subscribers} subscribers, {self.services} services"
+
+
+def _check(kind: str, name: str, reply: list) -> list:
+    code, message, value = reply
+    if code != 1:
+        raise ReregisterError(kind, name, message)
+    return value
+
+
+def register_all(master_uri: str, caller_id: str, node_uri: str) -> Registered:
+    """Register every topic and service of this process with the master at `master_uri`."""
+    from rospy.impl.registration import get_service_manager, get_topic_manager
+
+    master = xmlrpc.client.ServerProxy(master_uri)
+    node = xmlrpc.client.ServerProxy(node_uri)
+    topics, services = get_topic_manager(), get_service_manager()
+    publications, subscriptions = topics.get_publications(), topics.get_subscriptions()
+    for name, data_type in publications:
+        _check("publisher", name, master.registerPublisher(caller_id, name, data_type, node_uri))
+    for name, data_type in subscriptions:
+        reply = master.registerSubscriber(caller_id, name, data_type, node_uri)
+        publishers = _check("subscriber", name, reply)
+        node.publisherUpdate(MASTER_CALLER, name, publishers)
+    service_list = services.get_services()
+    for name, service_uri in service_list:
+        _check("service", name, master.registerService(caller_id, name, service_uri, node_uri))
+    return Registered(len(publications), len(subscriptions), len(service_list))
+
+
+def master_pid(master_uri: str, caller_id: str) -> int | None:
+    """The master's pid, or None when it does not answer."""
+    import rosgraph
+
+    try:
+        return rosgraph.Master(caller_id, master_uri=master_uri).getPid()
+    except Exception:
+        return None
+
+
+class MasterWatch:
+    """A thread that re-registers this node whenever the master's pid changes."""
+
+    def __init__(
+        self, period: float = POLL_PERIOD_S, on_reregistered: Callable[[Registered], None] | None = None
+    ) -> None:
+        import rospy
+
+        self.master_uri = _master_uri()
+        self.caller_id = rospy.get_caller_id()
+        self.node_uri = rospy.get_node_uri()
+        self.period = period
+        self.count = 0
+        self._on_reregistered = on_reregistered
+        self._stop = threading.Event()
+        self._pid = master_pid(self.master_uri, self.caller_id)
+        self._thread = threading.Thread(target=self._run, name="master-watch", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.period):
+            pid = master_pid(self.master_uri, self.caller_id)
+            if pid is None or pid == self._pid:
+                continue
+            try:
+                registered = register_all(self.master_uri, self.caller_id, self.node_uri)
+            except (OSError, xmlrpc.client.Error, ReregisterError) as exc:
+                log.warning("the ROS master restarted; registering again failed (%s); will retry", exc)
+                continue
+            self._pid = pid
+            self.count += 1
+            log.warning("the ROS master restarted (pid %d); registered again: %s", pid, registered)
+            if self._on_reregistered is not None:
+                self._on_reregistered(registered)
+
+    def stop(self) -> None:
+        self._stop.set()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout=5)
+
+
+def _master_uri() -> str:
+    import rosgraph
+
+    return rosgraph.get_master_uri()

@@ -1,0 +1,40 @@
+"""The node's status topic: `/airsim_mapper/<node>/status`, a latched std_msgs/String holding JSON.
+
+Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale), reconnects, sim_losses,
+master_reregistrations, and per simulator topic stream: received, dropped, handled, errors, age_s
+(seconds since its last message). Published on every state change and once a second.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+from typing import Any
+
+CONNECTED = "connected"
+STALE = "stale"
+STOPPED = "stopped"
+
+
+def status_topic(node_name: str) -> str:
+    return f"/airsim_mapper/{node_name.strip('/')}/status"
+
+
+class StatusPublisher:
+    """Publishes status dicts as JSON; skips nothing, so subscribers see every change."""
+
+    def __init__(self, node_name: str) -> None:
+        import rospy
+        from std_msgs.msg import String
+
+        self._string = String
+        self._lock = threading.Lock()
+        self.publisher = rospy.Publisher(status_topic(node_name), String, queue_size=2, latch=True)
+
+    def publish(self, status: dict[str, Any]) -> None:
+        text = json.dumps(status, sort_keys=True)
+        with self._lock:
+            self.publisher.publish(self._string(data=text))
+
+    def close(self) -> None:
+        self.publisher.unregister()

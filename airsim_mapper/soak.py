@@ -1,0 +1,331 @@
+"""`make soak`: a long run of the bridge under full load, checked for leaks and stalls.
+
+Starts a private roscore, the headless simulator and `scripts/hello_ros.py` (the mission flying Drone1
+while the bridge runs in the same process), subscribes to every topic that process publishes, and samples
+the process's RSS and thread count every few seconds. After a warm-up it reports delivered rates, the
+bridge's drop counts (from its status topic) and the largest gap between two actual_pose messages.
+
+Pass: RSS growth under 20 MB after warm-up, a thread count that stays within 2 of its post-warm-up value,
+no actual_pose gap over 100 ms. Exit code 0 on pass, 1 on fail. SOAK_SECONDS sets the length (600).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+NODE = "soak_hello"
+POSE_TOPIC = "/airsim_node/Drone1/actual_pose"
+SAMPLE_PERIOD_S = 5.0
+RSS_LIMIT_MB = 20.0
+THREAD_SLACK = 2
+POSE_GAP_LIMIT_S = 0.100
+
+
+class SoakError(RuntimeError):
+    """The soak rig could not be started."""
+
+
+@dataclass
+class Sample:
+    t: float
+    rss_mb: float
+    threads: int
+
+
+@dataclass
+class Verdict:
+    failures: list[str] = field(default_factory=list)
+
+    def check(self, ok: bool, message: str) -> None:
+        if not ok:
+            self.failures.append(message)
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def sample(pid: int, t0: float) -> Sample:
+    rss_kb = 0
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            rss_kb = int(line.split()[1])
+    return Sample(time.monotonic() - t0, rss_kb / 1024.0, len(os.listdir(f"/proc/{pid}/task")))
+
+
+def wait_for(predicate, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.1)
+    raise SoakError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+class Rig:
+    """The processes of one soak run, each in its own process group, logs in `workdir`."""
+
+    def __init__(self, workdir: Path) -> None:
+        self.workdir = workdir
+        self.procs: list[subprocess.Popen] = []
+        master_port = free_port()
+        self.env = {
+            **os.environ,
+            "ROS_MASTER_URI": f"http://localhost:{master_port}",
+            "ROS_HOSTNAME": "localhost",
+            "ROS_LOG_DIR": str(workdir / "ros_log"),
+            "ROS_HOME": str(workdir / "ros_home"),
+            "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+            "PYTHONUNBUFFERED": "1",
+        }
+        self.env.pop("ROS_IP", None)
+        self.master_port = master_port
+        self.topics_port, self.services_port = free_port(), free_port()
+
+    def start(self, name: str, argv: list[str]) -> subprocess.Popen:
+        with open(self.workdir / f"{name}.log", "wb") as log:
+            proc = subprocess.Popen(
+                argv, stdout=log, stderr=subprocess.STDOUT, env=self.env, cwd=ROOT, start_new_session=True
+            )
+        self.procs.append(proc)
+        return proc
+
+    def stop_all(self) -> None:
+        for proc in reversed(self.procs):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGINT)
+                try:
+                    proc.wait(timeout=15)
+                except subprocess.TimeoutExpired:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait(timeout=5)
+
+
+class Listener:
+    """Subscribes to every topic of the bridge node; counts messages and times actual_pose."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, int] = {}
+        self.pose_times: list[float] = []
+        self.pose_stamps: list[float] = []  # header stamps (sim time): tells lost messages from late ones
+        self.status: dict = {}
+        self._lock = threading.Lock()
+        self._subs: list = []
+
+    def attach(self, topics: list[str]) -> None:
+        import rospy
+        from std_msgs.msg import String
+
+        for topic in topics:
+            if topic.endswith("/status"):
+                self._subs.append(rospy.Subscriber(topic, String, self._on_status))
+            elif topic == POSE_TOPIC:
+                from geometry_msgs.msg import PoseStamped
+
+                self._subs.append(rospy.Subscriber(topic, PoseStamped, self._on_pose, queue_size=50))
+            else:
+                self._subs.append(rospy.Subscriber(topic, rospy.AnyMsg, self._counter(topic), queue_size=50))
+
+    def _counter(self, topic: str):
+        def on_message(_msg) -> None:
+            with self._lock:
+                self.counts[topic] = self.counts.get(topic, 0) + 1
+
+        return on_message
+
+    def _on_pose(self, msg) -> None:
+        now = time.monotonic()
+        with self._lock:
+            self.counts[POSE_TOPIC] = self.counts.get(POSE_TOPIC, 0) + 1
+            self.pose_times.append(now)
+            self.pose_stamps.append(msg.header.stamp.to_sec())
+
+    def _on_status(self, msg) -> None:
+        self.status = json.loads(msg.data)
+
+    def snapshot(self) -> tuple[dict[str, int], list[float], list[float]]:
+        with self._lock:
+            return dict(self.counts), list(self.pose_times), list(self.pose_stamps)
+
+
+def node_topics(node: str) -> list[str]:
+    import rosgraph
+
+    state = rosgraph.Master("/soak").getSystemState()
+    return sorted(topic for topic, nodes in state[0] if f"/{node}" in nodes and topic not in ("/rosout",))
+
+
+def _max_step(values: list[float]) -> float:
+    import numpy as np
+
+    return float(np.diff(np.asarray(values)).max()) if len(values) > 1 else float("nan")
+
+
+def gap_percentile(times: list[float], since: float, q: float) -> float:
+    import numpy as np
+
+    after = np.asarray([t for t in times if t >= since])
+    return float(np.percentile(np.diff(after), q)) if after.size > 1 else float("inf")
+
+
+def largest_gap(times: list[float], since: float) -> float:
+    import numpy as np
+
+    after = np.asarray([t for t in times if t >= since])
+    return float(np.diff(after).max()) if after.size > 1 else float("inf")
+
+
+def run(seconds: float, workdir: Path) -> int:
+    rig = Rig(workdir)
+    warmup = min(60.0, max(20.0, seconds * 0.2))
+    try:
+        rig.start("roscore", ["roscore", "-p", str(rig.master_port)])
+        os.environ.update(
+            {k: rig.env[k] for k in ("ROS_MASTER_URI", "ROS_HOSTNAME", "ROS_LOG_DIR", "ROS_HOME")}
+        )
+        import rosgraph
+
+        wait_for(lambda: _answers(rosgraph), 30, "roscore")
+        sim_argv = [sys.executable, "-m", "airsim_mapper.simserver", "--address", "127.0.0.1"]
+        sim_argv += ["--topicsport", str(rig.topics_port), "--servicesport", str(rig.services_port)]
+        rig.start("simserver", sim_argv)
+        wait_for(lambda: _port_open(rig.topics_port) and _port_open(rig.services_port), 30, "the simulator")
+        hello = rig.start(
+            "hello_ros",
+            [
+                sys.executable,
+                str(ROOT / "scripts" / "hello_ros.py"),
+                "--nodename",
+                NODE,
+                "--topicsport",
+                str(rig.topics_port),
+                "--servicesport",
+                str(rig.services_port),
+                "--seconds",
+                str(seconds + 120),
+            ],
+        )
+        import rospy
+
+        rospy.init_node("soak_listener", anonymous=True, disable_signals=True)
+        wait_for(lambda: POSE_TOPIC in node_topics(NODE), 60, "the bridge's topics")
+        time.sleep(1.0)
+        listener = Listener()
+        topics = node_topics(NODE)
+        listener.attach(topics)
+        print(f"soak: {seconds:.0f} s, warm-up {warmup:.0f} s, {len(topics)} topics subscribed", flush=True)
+        t0 = time.monotonic()
+        samples: list[Sample] = []
+        counts_at_warmup: dict[str, int] = {}
+        stamps_from = 0
+        while time.monotonic() - t0 < seconds:
+            if hello.poll() is not None:
+                raise SoakError(f"hello_ros exited with {hello.returncode}; see {workdir}/hello_ros.log")
+            s = sample(hello.pid, t0)
+            samples.append(s)
+            if not counts_at_warmup and s.t >= warmup:
+                counts_at_warmup = listener.snapshot()[0]
+                stamps_from = len(listener.snapshot()[2])
+            print(f"  t={s.t:6.0f} s  rss={s.rss_mb:7.1f} MB  threads={s.threads}", flush=True)
+            time.sleep(SAMPLE_PERIOD_S)
+        counts, pose_times, pose_stamps = listener.snapshot()
+        stamp_gap = _max_step(pose_stamps[stamps_from:])
+        print(f"largest actual_pose header-stamp step after warm-up: {stamp_gap * 1000:.0f} ms (sim time)")
+        return report(samples, warmup, t0, counts, counts_at_warmup, pose_times, listener.status, seconds)
+    finally:
+        rig.stop_all()
+        if "rospy" in sys.modules:
+            sys.modules["rospy"].signal_shutdown("soak done")
+
+
+def report(
+    samples: list[Sample],
+    warmup: float,
+    t0: float,
+    counts: dict[str, int],
+    counts_at_warmup: dict[str, int],
+    pose_times: list[float],
+    status: dict,
+    seconds: float,
+) -> int:
+    after = [s for s in samples if s.t >= warmup]
+    verdict = Verdict()
+    verdict.check(len(after) >= 2, f"run too short for a verdict after the {warmup:.0f} s warm-up")
+    window = max(1e-9, seconds - warmup)
+    print("delivered rates after warm-up (Hz):")
+    for topic in sorted(counts):
+        rate = (counts[topic] - counts_at_warmup.get(topic, 0)) / window
+        print(f"  {rate:8.1f}  {topic}")
+    streams = status.get("streams", {})
+    print("bridge streams (received / dropped):")
+    for topic, s in sorted(streams.items()):
+        print(f"  {s['received']:8d} / {s['dropped']:6d}  {topic}")
+    gap = largest_gap(pose_times, t0 + warmup)
+    summary = {
+        "largest_pose_gap_ms": round(gap * 1000, 1),
+        "p99_pose_gap_ms": round(gap_percentile(pose_times, t0 + warmup, 99) * 1000, 1),
+        "state": status.get("state"),
+        "sim_losses": status.get("sim_losses"),
+    }
+    if after:
+        rss_growth = max(s.rss_mb for s in after) - after[0].rss_mb
+        threads = [s.threads for s in after]
+        summary.update(rss_start_mb=round(after[0].rss_mb, 1), rss_growth_mb=round(rss_growth, 1))
+        summary.update(threads_min=min(threads), threads_max=max(threads))
+        verdict.check(rss_growth < RSS_LIMIT_MB, f"RSS grew {rss_growth:.1f} MB (limit {RSS_LIMIT_MB:.0f})")
+        verdict.check(
+            max(threads) - min(threads) <= THREAD_SLACK, f"thread count varied {min(threads)}..{max(threads)}"
+        )
+    verdict.check(gap <= POSE_GAP_LIMIT_S, f"largest actual_pose gap {gap * 1000:.0f} ms (limit 100)")
+    print("summary: " + json.dumps(summary))
+    for failure in verdict.failures:
+        print(f"FAIL: {failure}")
+    print("PASS" if not verdict.failures else "FAIL", flush=True)
+    return 0 if not verdict.failures else 1
+
+
+def _answers(rosgraph) -> bool:
+    try:
+        rosgraph.Master("/soak").getPid()
+    except Exception:
+        return False
+    return True
+
+
+def _port_open(port: int) -> bool:
+    with socket.socket() as sock:
+        sock.settimeout(0.2)
+        return sock.connect_ex(("127.0.0.1", port)) == 0
+
+
+def main() -> int:
+    seconds = float(os.environ.get("SOAK_SECONDS", "600"))
+    workdir = Path(tempfile.mkdtemp(prefix="airsim-mapper-soak-"))
+    try:
+        code = run(seconds, workdir)
+    except SoakError as exc:
+        print(f"soak: {exc}", file=sys.stderr)
+        return 1
+    if code == 0:
+        shutil.rmtree(workdir, ignore_errors=True)
+    else:
+        print(f"logs kept in {workdir}")
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,183 @@
+"""Probe node for the reliability tests (run as a subprocess; prints what it sees, one line each).
+
+probe.py watch TOPIC           print "MSG <wall time>" for every message on TOPIC (any type)
+probe.py status NODE           print "STATUS <json>" for every status message of bridge node NODE
+probe.py twist TOPIC N VX [FRAME]   publish N geometry_msgs/Twist at 10 Hz (VX may be nan, inf),
+                               then print "LAST <wall time>" and keep the publisher until killed
+probe.py pose TOPIC X Y Z QW QX QY QZ [FRAME]   publish one PoseStamped 3 times, print "SENT"
+probe.py trials TOPIC N VX SERVICESPORT ROBOT   watchdog trials: print "TRIAL <seconds>" per trial
+probe.py bad ROBOT_PREFIX CAMERA  publish malformed cmd_vel and desired_pose messages, print "SENT <n>"
+probe.py strings TOPIC DATA...  publish each DATA as a std_msgs/String, 0.5 s apart, then print "SENT"
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+
+import rospy
+
+
+def connected(pub: rospy.Publisher, timeout: float = 20.0) -> None:
+    deadline = time.monotonic() + timeout
+    while pub.get_num_connections() == 0:
+        if time.monotonic() > deadline:
+            raise SystemExit(f"nobody subscribed to {pub.name}")
+        time.sleep(0.05)
+
+
+def watch(topic: str) -> None:
+    rospy.Subscriber(topic, rospy.AnyMsg, lambda _m: print(f"MSG {time.time():.4f}", flush=True))
+    print("READY", flush=True)
+    rospy.spin()
+
+
+def status(node: str) -> None:
+    from std_msgs.msg import String
+
+    rospy.Subscriber(f"/airsim_mapper/{node}/status", String, lambda m: print("STATUS " + m.data, flush=True))
+    rospy.spin()
+
+
+def twist(topic: str, count: int, vx: float, frame: str | None = None) -> rospy.Publisher:
+    from geometry_msgs.msg import Twist
+
+    pub = rospy.Publisher(topic, Twist, queue_size=10)
+    connected(pub)
+    msg = Twist()
+    msg.linear.x = vx
+    for _ in range(count):
+        pub.publish(msg)
+        time.sleep(0.1)
+    print(f"LAST {time.time():.4f}", flush=True)
+    return pub
+
+
+def pose(topic: str, values: list[float], frame: str) -> None:
+    from geometry_msgs.msg import PoseStamped
+
+    pub = rospy.Publisher(topic, PoseStamped, queue_size=10)
+    connected(pub)
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    p, q = msg.pose.position, msg.pose.orientation
+    p.x, p.y, p.z, q.w, q.x, q.y, q.z = values
+    for _ in range(3):
+        pub.publish(msg)
+        time.sleep(0.1)
+    print("SENT", flush=True)
+    rospy.spin()
+
+
+def strings(topic: str, items: list[str]) -> None:
+    from std_msgs.msg import String
+
+    pub = rospy.Publisher(topic, String, queue_size=10)
+    connected(pub)
+    for item in items:
+        pub.publish(String(data=item))
+        time.sleep(0.5)
+    print("SENT", flush=True)
+    rospy.spin()
+
+
+def bad(prefix: str, camera: str) -> None:
+    """Every kind of malformed command the bridge must keep from the simulator."""
+    from geometry_msgs.msg import PoseStamped, Twist
+
+    nan, inf = float("nan"), float("inf")
+    cmd_vel = rospy.Publisher(f"{prefix}/cmd_vel", Twist, queue_size=20)
+    pose = rospy.Publisher(f"{prefix}/desired_pose", PoseStamped, queue_size=20)
+    cam = rospy.Publisher(f"{prefix}/{camera}/desired_pose", PoseStamped, queue_size=20)
+    for pub in (cmd_vel, pose, cam):
+        connected(pub)
+    twists = [Twist(), Twist(), Twist()]
+    twists[0].linear.x, twists[1].angular.z, twists[2].linear.z = nan, -inf, inf
+
+    def stamped(xyz: tuple, wxyz: tuple, frame: str = "map") -> PoseStamped:
+        msg = PoseStamped()
+        msg.header.frame_id = frame
+        msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = xyz
+        q = msg.pose.orientation
+        q.w, q.x, q.y, q.z = wxyz
+        return msg
+
+    poses = [
+        stamped((nan, 0.0, -5.0), (1.0, 0.0, 0.0, 0.0)),
+        stamped((1.0, inf, -5.0), (1.0, 0.0, 0.0, 0.0)),
+        stamped((1.0, 0.0, -5.0), (0.0, 0.0, 0.0, 0.0)),
+        stamped((1.0, 0.0, -5.0), (3.0, 0.0, 0.0, 0.0)),  # norm 3: not a rotation
+        stamped((1.0, 0.0, -5.0), (nan, 0.0, 0.0, 0.0)),
+        stamped((1.0, 0.0, -5.0), (1.0, 0.0, 0.0, 0.0), frame="base_link"),
+    ]
+    for msg in twists:
+        cmd_vel.publish(msg)
+        time.sleep(0.05)
+    for msg in poses:
+        pose.publish(msg)
+        time.sleep(0.05)
+    for msg in poses[:5]:
+        cam.publish(msg)
+        time.sleep(0.05)
+    print(f"SENT {len(twists)} {len(poses)} 5", flush=True)
+    rospy.spin()
+
+
+def trials(topic: str, count: int, vx: float, services_port: int, robot: str) -> None:
+    """Per trial: drive, stop publishing, and time until the ground truth stops moving (10 ms polls)."""
+    from geometry_msgs.msg import Twist
+    from projectairsim import ProjectAirSimClient
+
+    client = ProjectAirSimClient("127.0.0.1", 0, services_port)
+    client.connect_services()
+
+    def position() -> tuple[float, float, float]:
+        t = client.request({"method": f"{robot}/GetGroundTruthPose", "params": {}, "version": 1.0})
+        return (t["translation"]["x"], t["translation"]["y"], t["translation"]["z"])
+
+    pub = rospy.Publisher(topic, Twist, queue_size=10)
+    connected(pub)
+    msg = Twist()
+    msg.linear.x = vx
+    for _ in range(count):
+        for _ in range(3):
+            pub.publish(msg)
+            last = time.monotonic()
+            time.sleep(0.1)
+        previous, moving_until = position(), last
+        while time.monotonic() - moving_until < 0.25 and time.monotonic() - last < 10:
+            time.sleep(0.01)
+            now, current = time.monotonic(), position()
+            if math.dist(previous, current) > 1e-4:
+                moving_until = now
+            previous = current
+        print(f"TRIAL {moving_until - last:.4f}", flush=True)
+    client.socket_services.close()
+
+
+def main(argv: list[str]) -> None:
+    rospy.init_node("probe", anonymous=True, disable_signals=False)
+    mode, args = argv[0], argv[1:]
+    if mode == "watch":
+        watch(args[0])
+    elif mode == "status":
+        status(args[0])
+    elif mode == "twist":
+        twist(args[0], int(args[1]), float(args[2]))
+        rospy.spin()
+    elif mode == "pose":
+        pose(args[0], [float(v) for v in args[1:8]], args[8] if len(args) > 8 else "map")
+    elif mode == "bad":
+        bad(args[0], args[1])
+    elif mode == "strings":
+        strings(args[0], args[1:])
+    elif mode == "trials":
+        trials(args[0], int(args[1]), float(args[2]), int(args[3]), args[4])
+    else:
+        raise SystemExit(f"unknown mode {mode!r}: " + json.dumps(argv))
+
+
+if __name__ == "__main__":
+    main(rospy.myargv(sys.argv)[1:])

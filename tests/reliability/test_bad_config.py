@@ -1,0 +1,103 @@
+"""Hand-edited configs: a bad mapping or start scene stops the node cleanly; a bad load_scene is refused."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from harness import ROOT, Launcher, RosMaster, wait_until
+
+from reliability.relkit import (
+    NODE_SCRIPT,
+    PROJECT_SIM_CONFIG,
+    ROBOT,
+    SCENE,
+    Ports,
+    probe,
+    stamps,
+    start_node,
+    start_server,
+    statuses,
+    wait_output,
+)
+
+BROKEN = ROOT / "tests" / "mapping" / "broken"
+
+
+def run_node(*args: str) -> subprocess.CompletedProcess:
+    """The node up to its config checks (no master needed: they run before rospy.init_node)."""
+    argv = [sys.executable, str(NODE_SCRIPT), "--simconfigpath", str(PROJECT_SIM_CONFIG), *args]
+    return subprocess.run(argv, capture_output=True, text=True, timeout=60, cwd=ROOT)
+
+
+def test_an_invalid_mapping_stops_the_node_with_exit_code_1_and_the_validation_errors():
+    result = run_node("--mapping", str(BROKEN / "misspelt_converter.yaml"))
+    assert result.returncode == 1
+    assert "misspelt_converter.yaml" in result.stderr and "converter" in result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+
+
+def test_a_missing_mapping_file_stops_the_node_with_exit_code_1_and_no_traceback(tmp_path: Path):
+    result = run_node("--mapping", str(tmp_path / "nope.yaml"))
+    assert result.returncode == 1
+    assert "nope.yaml" in result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+
+
+def test_a_missing_start_scene_stops_the_node_with_exit_code_1_and_no_traceback():
+    result = run_node("--scene", "no_such_scene.jsonc")
+    assert result.returncode == 1
+    assert "no_such_scene.jsonc" in result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+
+
+@pytest.fixture
+def config_dir(tmp_path: Path) -> Path:
+    """The project's scenes plus broken ones, and a symlink leading out of the directory."""
+    root = tmp_path / "configs"
+    shutil.copytree(PROJECT_SIM_CONFIG, root)
+    (root / "invalid_json.jsonc").write_text('{"id": "X", "actors": [')
+    scene = json.loads(
+        "\n".join(
+            line for line in (root / SCENE).read_text().splitlines() if not line.lstrip().startswith("//")
+        )
+    )
+    scene["actors"] = "not a list"
+    (root / "schema_violation.jsonc").write_text(json.dumps(scene))
+    outside = tmp_path / "outside.jsonc"
+    shutil.copy(root / SCENE, outside)
+    (root / "escape.jsonc").symlink_to(outside)
+    return root
+
+
+def test_bad_scenes_on_load_scene_are_refused_and_the_current_scene_keeps_running(
+    launcher: Launcher, ros_master: RosMaster, config_dir: Path
+):
+    ports = Ports.free()
+    start_server(launcher, ports)
+    node = start_node(launcher, ports, "--scene", SCENE, node_name="picky", sim_config=config_dir)
+    watcher = probe(launcher, "pose", "watch", f"{ROBOT}/actual_pose")
+    status = probe(launcher, "status", "status", "picky")
+    wait_until(lambda: len(stamps(watcher)) > 5, 30, what="actual_pose")
+    bad = {
+        "missing.jsonc": "No such file",
+        "invalid_json.jsonc": "invalid JSON",
+        "schema_violation.jsonc": "schema",
+        str(config_dir / SCENE): "must be relative",
+        "escape.jsonc": "symlink",
+        "../configs/" + SCENE: "'..'",
+    }
+    sender = probe(launcher, "load", "strings", "/ProjectAirSim/node/picky/load_scene", *bad)
+    wait_output(sender, "SENT", 30)
+    for name, why in bad.items():
+        wait_output(node, f"load_scene {name!r} refused", 10)
+        refusal = node.output().split(f"load_scene {name!r} refused", 1)[1].split("[ERROR]")[0]
+        assert why in refusal, refusal
+    count = len(stamps(watcher))
+    wait_until(lambda: len(stamps(watcher)) > count + 20, 10, what="actual_pose after the refusals")
+    assert statuses(status)[-1]["scene"] == SCENE and statuses(status)[-1]["state"] == "connected"
+    assert node.alive() and "Traceback" not in node.output()

@@ -1,0 +1,101 @@
+"""Unit tests of the pure parts: backoff, the loss verdict, opening a client, the start-up wait,
+re-registration with a restarted master, and the converter registry's closed world."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pytest
+from harness import free_port
+
+from airsim_mapper.cli.node import connect
+from airsim_mapper.convert import registry
+from airsim_mapper.engine.health import Backoff, HealthCheck, SimUnreachable, open_client
+from airsim_mapper.engine.reregister import ReregisterError, _check
+from airsim_mapper.engine.sim_link import SimLink, SimLinkDead
+from airsim_mapper.engine.status import status_topic
+
+
+def test_backoff_doubles_to_half_a_second_then_slows_to_two_and_five_seconds():
+    backoff = Backoff()
+    delays = [backoff.next_delay() for _ in range(35)]
+    assert delays[:3] == [0.25, 0.5, 0.5]
+    assert set(delays[2:10]) == {0.5}
+    assert set(delays[10:30]) == {2.0}
+    assert set(delays[30:]) == {5.0}
+    backoff.reset()
+    assert backoff.next_delay() == 0.25
+
+
+@dataclass
+class FakeLink:
+    up: bool = True
+    answers: list[bool] = field(default_factory=list)
+
+    def connected(self) -> bool:
+        return self.up
+
+    def probe(self, timeout: float) -> bool:
+        return self.answers.pop(0)
+
+
+def test_a_dropped_connection_is_lost_at_once():
+    assert HealthCheck().check(FakeLink(up=False)) == "the simulator closed the connection"
+
+
+def test_three_unanswered_probes_in_a_row_mean_lost_and_an_answer_resets_the_count():
+    check = HealthCheck()
+    link = FakeLink(answers=[False, False, True, False, False, False])
+    verdicts = [check.check(link) for _ in range(6)]
+    assert verdicts[:5] == [None] * 5
+    assert verdicts[5] == "no answer to 3 probes of 1 s"
+
+
+def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable():
+    port = free_port()
+    with pytest.raises(SimUnreachable, match=rf"simulator at 127\.0\.0\.1:{port}/{port} not reachable"):
+        open_client("127.0.0.1", port, port)
+
+
+def test_connect_retries_with_backoff_and_gives_up_when_ros_shuts_down(caplog):
+    port = free_port()
+    slept: list[float] = []
+    result = connect("127.0.0.1", port, port, lambda: len(slept) >= 4, sleep=slept.append)
+    assert result is None
+    assert slept == [0.25, 0.5, 0.5, 0.5]
+    lines = [r.getMessage() for r in caplog.records if "waiting for it" in r.getMessage()]
+    assert len(lines) == 4 and "attempt 4, next in 0.5 s" in lines[-1]
+
+
+def test_a_dead_link_fails_every_call_at_once_and_only_remembers_subscriptions():
+    class Client:
+        socket_topics = None
+
+        def __init__(self) -> None:
+            self.subs: dict = {}
+
+    client = Client()
+    link = SimLink(client)
+    link.mark_dead()
+    with pytest.raises(SimLinkDead, match=r"^/Sim/X/Hover: the simulator connection is lost$"):
+        link.call("/Sim/X/Hover", {}, timeout=5)
+    with pytest.raises(SimLinkDead, match=r"^/Sim/x: the simulator connection is lost$"):
+        link.publish("/Sim/x", {})
+    link.subscribe("/Sim/t", print)
+    assert client.subs == {} and not link.probe(0.1)
+    link.stop_loop()
+
+
+def test_a_master_refusal_names_what_was_refused():
+    assert _check("publisher", "/a", [1, "ok", 7]) == 7
+    with pytest.raises(ReregisterError, match=r"^the master refused to register subscriber /b: nope$"):
+        _check("subscriber", "/b", [-1, "nope", 0])
+
+
+def test_the_status_topic_lives_under_the_node_name():
+    assert status_topic("/bridge") == "/airsim_mapper/bridge/status"
+
+
+def test_a_mapping_can_only_name_converters_from_the_catalogue():
+    with pytest.raises(LookupError, match=r"os\.system"):
+        registry.get("os.system")
