@@ -218,9 +218,10 @@ def _diagnose_robot(root: Path, data: Mapping[str, Any], err: Exception) -> Scen
         names = _robot_config_names(actor)
         merged: dict[str, Any] = {}
         for name in names:
-            merged = merge_dicts(
-                merged, _parse(root / name, f"robot config of actor '{actor['name']}'", False)
-            )
+            part = _parse(root / name, f"robot config of actor '{actor['name']}'", False)
+            if not isinstance(part, dict):
+                return SceneError.single(str(root / name), "a robot config must be a JSON object")
+            merged = merge_dicts(merged, part)
         errors = sorted(validator.iter_errors(merged), key=lambda e: [str(p) for p in e.path])
         if errors:
             files = ", ".join(str(root / name) for name in names)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import logging
 import signal
 import sys
@@ -56,7 +57,7 @@ async def mission(drone, target: tuple[float, float, float], speed: float) -> No
             log.info("reached (%.1f, %.1f, %.1f) [leg %d]", x, y, z, legs)
 
 
-async def main(client, bridge, drone, args: argparse.Namespace) -> None:
+async def main(client, bridge, drone, hover_method: str, args: argparse.Namespace) -> None:
     """Run the mission until ROS shuts down (Ctrl-C) or --seconds pass; then stop everything."""
     import rospy
 
@@ -72,6 +73,11 @@ async def main(client, bridge, drone, args: argparse.Namespace) -> None:
             break
         await asyncio.sleep(0.2)  # yield to the mission between checks
     task.cancel()
+    # Hover pre-empts the running move: the simulator answers its pending request (false), so the
+    # cancelled mission finishes cleanly, and the drone holds its position.
+    with contextlib.suppress(Exception):
+        client.request({"method": f"{hover_method}", "params": {}, "version": 1.0})
+    await asyncio.wait({task}, timeout=2.0)
     bridge.shutdown()
     # Closing the client's sockets ends the mission's pending request, so the cancelled task can finish.
     client.disconnect()
@@ -97,7 +103,7 @@ def run(argv: list[str]) -> int:
     except BaseException:
         client.disconnect()
         raise
-    asyncio.run(main(client, bridge, drone, args))
+    asyncio.run(main(client, bridge, drone, f"{world.parent_topic}/robots/{args.robot}/Hover", args))
     return 0
 
 

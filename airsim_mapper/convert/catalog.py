@@ -256,6 +256,15 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "service request -> robot SetPose params that return it to its scene origin, at rest",
         ),
         _c(
+            "trigger_all",
+            ROS_TO_SIM,
+            ["std_srvs/Trigger"],
+            "service",
+            "command",
+            "trigger",
+            "Trigger -> the robot method params.method on every robot of the scene (sim: the robots prefix)",
+        ),
+        _c(
             "set_bool",
             ROS_TO_SIM,
             ["std_srvs/SetBool"],

@@ -114,8 +114,9 @@ def _float_pixels(encoding: str, data: bytes, height: int, width: int, order: st
 
 def _payload(msg: Mapping[str, Any], encoding: str) -> bytes:
     data = sim_fields.field(msg, "data", "image")
-    if encoding == "32FC1" and not len(data) and msg.get("data_float"):
-        values = np.asarray(msg["data_float"], dtype="<f4")
+    data_float = msg.get("data_float")  # a list, or a numpy array on the fast path
+    if encoding == "32FC1" and not len(data) and data_float is not None and len(data_float):
+        values = np.asarray(data_float, dtype="<f4")
         if values.ndim != 1:
             raise ConversionError("image: data_float must be a flat list of numbers")
         return values.tobytes()

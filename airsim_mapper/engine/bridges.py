@@ -307,6 +307,8 @@ class RosService(Bridge):
         response = self._response()
         try:
             params = self.convert(request, self.ctx)
+            if self.spec.converter == "trigger_all":
+                return self._on_all_robots(response, params)
             result = self.services.sim.call(self.spec.sim, params)
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
@@ -316,6 +318,25 @@ class RosService(Bridge):
             self._after(result)
         ok = result is not False and result is not None
         return _fill(response, ok, "" if isinstance(result, bool) else str(result))
+
+    def _on_all_robots(self, response: Any, params: dict) -> Any:
+        """Call `<sim>/<robot>/<params.method>` on every robot of the scene at once; succeed if all do."""
+        method = self.spec.params["method"]
+        robots = list(self.spec.source.get("robots", []))
+        sim = self.services.sim
+        calls = {robot: sim.call_async(f"{self.spec.sim}/{robot}/{method}", params) for robot in robots}
+        failed = []
+        for robot, future in calls.items():
+            try:
+                if future.result(timeout=float(self.spec.params.get("timeout_s", 60.0))) in (False, None):
+                    failed.append(f"{robot}: false")
+            except Exception as exc:
+                failed.append(f"{robot}: {exc}")
+        self.stats.messages += 1
+        if failed:
+            self.fail(f"{method} failed for " + "; ".join(failed))
+        message = "; ".join(failed) or f"{method}: {len(robots)} robots"
+        return _fill(response, not failed and bool(robots), message)
 
     def stop(self) -> None:
         if self.service is not None:

@@ -105,7 +105,8 @@ def elements(
         return
     base["scene_name"] = scene.name
     if rule.domain == "scene":
-        yield scene.name, base, {"scene_name": scene.name, "file": scene.file}
+        robots = [robot.name for robot in scene.robots]
+        yield scene.name, base, {"scene_name": scene.name, "file": scene.file, "robots": robots}
     elif rule.domain == "robot":
         yield from _robot_elements(scene, base)
     elif rule.domain == "first_robot":

@@ -108,11 +108,10 @@ def test_hello_ros_flies_to_the_ball_while_the_bridge_publishes(rig_factory):
 
 
 def unexpected_tracebacks(output: str) -> list[str]:
-    """Tracebacks in a log, except pynng's own noise when the client's abandoned request contexts are
-    garbage-collected after disconnect ("Exception ignored in: <function Context.__del__ ...>")."""
-    lines = output.splitlines()
-    return [
-        lines[i + 1] if i + 1 < len(lines) else line
-        for i, line in enumerate(lines)
-        if line.startswith("Traceback") and not (i > 0 and "Context.__del__" in lines[i - 1])
-    ]
+    """Tracebacks in a log that pass through this project's code (airsim_mapper or the script).
+
+    The client logs its own abandoned requests at disconnect (pynng ConnectionReset in
+    postprocess_response_async_with_callback, Context.__del__ on closed sockets); those are the
+    library's, not ours, and do not count."""
+    blocks = output.split("Traceback (most recent call last):")[1:]
+    return [block[:300] for block in blocks if "airsim_mapper" in block or "hello_ros.py" in block]

@@ -12,7 +12,8 @@ from airsim_mapper.scene import read_scene
 DEFAULT = ROOT / "mappings" / "default.yaml"
 LOAD_SCENE = "/ProjectAirSim/node/projectairsim/load_scene"
 STREAMING = ["/airsim_streaming_camera/image_raw", "/airsim_streaming_camera/switch_view"]
-SCENE_WIDE = ["/clock", "/airsim_node/pause", "/airsim_node/step"]
+ALL_ROBOTS = [f"/airsim_node/{verb}_all" for verb in ("takeoff", "land", "hover", "arm", "disarm")]
+SCENE_WIDE = ["/clock", "/airsim_node/pause", "/airsim_node/step", *ALL_ROBOTS]
 ROBOT_SERVICES = (
     "takeoff",
     "land",

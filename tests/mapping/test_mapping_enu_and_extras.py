@@ -212,4 +212,20 @@ def test_default_mapping_maps_each_control_service_to_its_simulator_method(defau
             "trigger",
             {"args": {"wait_until_complete": True}},
         ),
+        **{
+            f"/airsim_node/{verb}_all": (
+                "service",
+                "std_srvs/Trigger",
+                "/Sim/SceneDroneSensors/robots",
+                "trigger_all",
+                {"method": method, **({"args": args} if args else {})},
+            )
+            for verb, method, args in (
+                ("takeoff", "Takeoff", {"timeout_sec": 20}),
+                ("land", "Land", {"timeout_sec": 60}),
+                ("hover", "Hover", {}),
+                ("arm", "Arm", {}),
+                ("disarm", "Disarm", {}),
+            )
+        },
     }

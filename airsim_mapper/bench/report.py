@@ -1,0 +1,315 @@
+"""Tables of the benchmark results, and the issue's targets checked against them (pure functions)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+LIDAR = "lidar 100k points"
+DEPTH = "depth 1920x1080 (16FC1, 1.1.0 server)"
+BGR = "image 1920x1080 BGR"
+CAMERA_HZ = 30.0
+POSE_HZ = 100.0
+SCALE_CAMERA_HZ = 10.0
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(str(cell)) for cell in column) for column in zip(header, *rows)]
+
+    def line(cells: list) -> str:
+        return "  ".join(
+            str(c).rjust(w) if i else str(c).ljust(w) for i, (c, w) in enumerate(zip(cells, widths))
+        )
+
+    return "\n".join([line(header), line(["-" * w for w in widths]), *(line(r) for r in rows)])
+
+
+def _ms(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def costs_table(costs: dict[str, dict[str, Any]]) -> str:
+    header = [
+        "per message, frame bytes -> serialised ROS msg (CPU ms)",
+        "bridge",
+        "client path",
+        "reference",
+        "x faster",
+        "bare serialise",
+        "bridge/bare",
+        "unpack client",
+        "unpack fast",
+        "view proto",
+    ]
+    rows = []
+    for name, c in costs.items():
+        ref = c.get("reference_ms")
+        ref_text = "-" if ref is None else f"{ref:.1f}" + ("*" if c.get("reference_extrapolated") else "")
+        rows.append(
+            [
+                name,
+                _ms(c.get("bridge_ms")) if "bridge_error" not in c else "error",
+                _ms(c.get("client_path_ms")),
+                ref_text,
+                f"{c['speedup_vs_reference']:.0f}x" if "speedup_vs_reference" in c else "-",
+                _ms(c.get("bare_serialize_ms")),
+                f"{c['ratio_to_bare_serialize']:.2f}" if "ratio_to_bare_serialize" in c else "-",
+                _ms(c.get("unpack_client_ms")),
+                _ms(c.get("unpack_fast_ms")),
+                _ms(c.get("view_prototype_ms")),
+            ]
+        )
+    notes = [
+        "* measured at 320x240 and scaled by the pixel count (the per-pixel loop takes seconds at 1080p)"
+    ]
+    notes += [f"error in {name}: {c['bridge_error']}" for name, c in costs.items() if "bridge_error" in c]
+    return _table(header, rows) + "\n" + "\n".join(notes)
+
+
+def topic(result: dict[str, Any], name: str | None = None) -> dict[str, Any]:
+    topics = result["topics"]
+    return topics[name] if name else next(iter(topics.values()))
+
+
+def per_message_cpu_ms(cores: float, rate_hz: float) -> float | None:
+    return cores / rate_hz * 1e3 if rate_hz > 0 else None
+
+
+def e2e_table(e2e: dict[str, Any]) -> str:
+    header = [
+        "end to end (separate processes)",
+        "rate Hz",
+        "p50 ms",
+        "p99 ms",
+        "CPU cores",
+        "CPU ms/msg",
+        "RSS MB",
+    ]
+    rows = []
+
+    def add(label: str, result: dict[str, Any], cpu_key: str, topic_name: str | None = None) -> None:
+        t = topic(result, topic_name)
+        cores = result.get(f"{cpu_key}_cpu_cores", 0.0)
+        rows.append(
+            [
+                label,
+                f"{t['rate_hz']:.1f}",
+                _ms(t.get("latency_p50_ms")),
+                _ms(t.get("latency_p99_ms")),
+                f"{cores:.2f} ({cpu_key})",
+                _ms(per_message_cpu_ms(cores, t["rate_hz"])),
+                f"{result.get(f'{cpu_key}_rss_mb', 0):.0f}" if f"{cpu_key}_rss_mb" in result else "-",
+            ]
+        )
+
+    base = e2e["baselines"]
+    add("raw rospy Image 1080p @30", base["rospy_image"], "publisher")
+    add("raw pynng 1080p frame @30", base["pynng_image"], "receiver")
+    camera_topics = list(e2e["bridge"]["camera"]["topics"])
+    add("bridge camera 1080p @30", e2e["bridge"]["camera"], "bridge", camera_topics[0])
+    add("bridge depth 1080p @30", e2e["bridge"]["depth"], "bridge")
+    add("raw rospy PointCloud2 100k @20", base["rospy_cloud"], "publisher")
+    add("raw pynng 100k scan @20", base["pynng_cloud"], "receiver")
+    add("bridge lidar 100k @20 (fast frames)", e2e["bridge"]["lidar"], "bridge")
+    add("bridge lidar 100k @20 (client path)", e2e["bridge"]["lidar_client_path"], "bridge")
+    add("bridge pose @100, idle", e2e["pose"]["idle"], "bridge")
+    add("bridge pose @100, 1080p camera @30", e2e["bridge"]["camera"], "bridge", camera_topics[1])
+    load = e2e["pose"]["camera_load"]
+    names = list(load["topics"])
+    add("bridge pose @100, 1080p camera @60 load", load, "bridge", names[0])
+    add("  (the load: camera 1080p @60)", load, "bridge", names[1])
+    text = _table(header, rows)
+    client_rows = []
+    for label, result in e2e.get("client_pose", {}).items():
+        for key in ("pose_idle", "pose_load", "camera_load"):
+            r = result[key]
+            client_rows.append(
+                [
+                    f"{label}: {key.replace('_', ' ')}",
+                    f"{r['rate_hz']:.1f}",
+                    _ms(r.get("latency_p50_ms")),
+                    _ms(r.get("latency_p99_ms")),
+                ]
+            )
+    if client_rows:
+        text += "\n\n" + _table(
+            ["bare client, one Pair0 connection, 1080p camera @60 as load", "rate Hz", "p50 ms", "p99 ms"],
+            client_rows,
+        )
+    scale_rows = []
+    for drones, result in e2e["scale"].items():
+        topics = result["topics"]
+        pose = [v["rate_hz"] for k, v in topics.items() if k.endswith("actual_pose")]
+        image = [v["rate_hz"] for k, v in topics.items() if k.endswith("/image")]
+        cores = result["bridge_cpu_cores"]
+        scale_rows.append(
+            [
+                drones,
+                f"{min(pose):.1f} / {sum(pose) / len(pose):.1f}",
+                f"{min(image):.1f} / {sum(image) / len(image):.1f}",
+                f"{cores:.2f}",
+                f"{cores / int(drones):.3f}",
+                f"{result['bridge_rss_mb']:.0f}",
+                f"{result['server_cpu_cores']:.2f}",
+            ]
+        )
+    scale = _table(
+        [
+            "drones (pose @100 + 320x240 camera @10 each)",
+            "pose Hz min/mean",
+            "image Hz min/mean",
+            "bridge cores",
+            "cores/drone",
+            "bridge RSS MB",
+            "server cores",
+        ],
+        scale_rows,
+    )
+    return text + "\n\n" + scale
+
+
+def _target(
+    name: str, value: float | None, limit: float, met: bool | None, unit: str, note: str = ""
+) -> dict[str, Any]:
+    return {"target": name, "value": value, "limit": limit, "unit": unit, "met": met, "note": note}
+
+
+def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
+    """The issue's targets with the measured value, the limit and whether it is met."""
+    c = results["costs"]
+    out = [
+        _target(
+            "100k-point scan, frame bytes -> PointCloud2, CPU",
+            c[LIDAR]["bridge_ms"],
+            5.0,
+            c[LIDAR]["bridge_ms"] <= 5.0,
+            "ms",
+        ),
+        _target(
+            "100k-point scan, speed-up over the reference",
+            c[LIDAR]["speedup_vs_reference"],
+            10.0,
+            c[LIDAR]["speedup_vs_reference"] >= 10.0,
+            "x",
+        ),
+        _target(
+            "1080p depth, frame bytes -> Image, CPU",
+            c[DEPTH]["bridge_ms"],
+            10.0,
+            c[DEPTH]["bridge_ms"] <= 10.0,
+            "ms",
+        ),
+        _target(
+            "1080p BGR bridge CPU / bare rospy serialisation of the same bytes",
+            c[BGR]["ratio_to_bare_serialize"],
+            1.2,
+            c[BGR]["ratio_to_bare_serialize"] <= 1.2,
+            "x",
+            "the bridge must copy the pixels out of the frame once: genpy packs uint8[] only from bytes",
+        ),
+    ]
+    if "view_prototype_ms" in c[BGR]:
+        ratio = c[BGR]["view_prototype_ms"] / c[BGR]["bare_serialize_ms"]
+        out.append(
+            _target(
+                "1080p BGR with the memoryview Image prototype / bare rospy serialisation",
+                ratio,
+                1.2,
+                ratio <= 1.2,
+                "x",
+                "pixels kept as a view into the received frame and written once by the serialiser",
+            )
+        )
+    e2e = results.get("e2e")
+    if not e2e:
+        return out
+    base, bridge = e2e["baselines"], e2e["bridge"]
+    camera = topic(bridge["camera"], next(k for k in bridge["camera"]["topics"] if k.endswith("/image")))
+    floor = topic(base["pynng_image"])["latency_p50_ms"] + topic(base["rospy_image"])["latency_p50_ms"]
+    out.append(
+        _target(
+            "1080p camera delivered end to end",
+            camera["rate_hz"],
+            CAMERA_HZ * 0.95,
+            camera["rate_hz"] >= CAMERA_HZ * 0.95,
+            "Hz",
+        )
+    )
+    ratio = camera["latency_p50_ms"] / floor
+    out.append(_target("1080p camera p50 / (raw pynng p50 + raw rospy p50)", ratio, 1.3, ratio <= 1.3, "x"))
+    bridge_ms = per_message_cpu_ms(
+        bridge["camera"]["bridge_cpu_cores"] - e2e["pose"]["idle"]["bridge_cpu_cores"], camera["rate_hz"]
+    )
+    pub = topic(base["rospy_image"])
+    pub_ms = per_message_cpu_ms(base["rospy_image"]["publisher_cpu_cores"], pub["rate_hz"])
+    if bridge_ms is not None and pub_ms:
+        out.append(
+            _target(
+                "1080p BGR bridge CPU per frame (above idle) / raw rospy publisher CPU per frame",
+                bridge_ms / pub_ms,
+                1.2,
+                bridge_ms / pub_ms <= 1.2,
+                "x",
+                f"bridge {bridge_ms:.1f} ms (includes receiving the frame from the simulator), "
+                f"publisher {pub_ms:.1f} ms",
+            )
+        )
+    pose_idle = topic(e2e["pose"]["idle"])
+    for label, result in (
+        ("30 Hz (nominal)", bridge["camera"]),
+        ("60 Hz (saturating)", e2e["pose"]["camera_load"]),
+    ):
+        pose = topic(result, next(k for k in result["topics"] if k.endswith("actual_pose")))
+        out.append(
+            _target(
+                f"pose p99 under 1080p camera load at {label}",
+                pose["latency_p99_ms"],
+                10.0,
+                pose["latency_p99_ms"] <= 10.0,
+                "ms",
+                f"idle p99 {pose_idle['latency_p99_ms']:.1f} ms; "
+                f"rate {pose['rate_hz']:.0f} Hz loaded vs {pose_idle['rate_hz']:.0f} Hz idle",
+            )
+        )
+    scale = e2e["scale"]
+    if scale:
+        counts = sorted(int(k) for k in scale)
+        cores = {n: scale[str(n)]["bridge_cpu_cores"] for n in counts}
+        small, large = counts[0], counts[-1]
+        mid = counts[len(counts) // 2]
+        slope_low = (cores[mid] - cores[small]) / max(mid - small, 1)
+        slope_high = (cores[large] - cores[mid]) / max(large - mid, 1)
+        growth = slope_high / slope_low if slope_low > 0 else None
+        out.append(
+            _target(
+                f"bridge CPU growth per drone, {mid}->{large} vs {small}->{mid} drones",
+                growth,
+                1.25,
+                None if growth is None else growth <= 1.25,
+                "x",
+                f"{slope_low:.3f} then {slope_high:.3f} cores per added drone",
+            )
+        )
+        rates = scale[str(large)]["topics"]
+        worst_pose = min(v["rate_hz"] for k, v in rates.items() if k.endswith("actual_pose"))
+        worst_image = min(v["rate_hz"] for k, v in rates.items() if k.endswith("/image"))
+        sustained = worst_pose >= 0.9 * POSE_HZ and worst_image >= 0.9 * SCALE_CAMERA_HZ
+        out.append(
+            _target(
+                f"{large} drones sustained (every pose >= 90 Hz, every camera >= 9 Hz)",
+                None,
+                0.9,
+                sustained,
+                "",
+                f"slowest pose {worst_pose:.1f} Hz, slowest camera {worst_image:.1f} Hz",
+            )
+        )
+    return out
+
+
+def targets_table(rows: list[dict[str, Any]]) -> str:
+    body = []
+    for r in rows:
+        value = "-" if r["value"] is None else f"{r['value']:.2f} {r['unit']}".strip()
+        verdict = {True: "met", False: "MISSED", None: "n/a"}[r["met"]]
+        body.append([r["target"], value, f"{r['limit']:g} {r['unit']}".strip(), verdict, r["note"]])
+    return _table(["target", "measured", "limit", "", "note"], body)
