@@ -19,18 +19,6 @@ from typing import Any
 
 from airsim_mapper.mapping.errors import ConfigError
 
-# image-type id -> the simulator's topic leaf for it (protocol.md section 4)
-SIM_IMAGE_LEAVES: dict[int, str] = {
-    0: "scene_camera",
-    1: "depth_planar_camera",
-    2: "depth_camera",
-    3: "segmentation_camera",
-    4: "depth_vis_camera",
-    5: "disparity_normalized_camera",
-    6: "surface_normals_camera",
-}
-
-
 SCENE_SCHEMA = "schema/scene_config_schema.jsonc"
 ROBOT_SCHEMA = "schema/robot_config_schema.jsonc"
 

@@ -23,12 +23,13 @@ from types import MappingProxyType
 from typing import Any
 
 from airsim_mapper.convert import catalog
+from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
 from airsim_mapper.mapping.model import Mapping as MappingDoc
 from airsim_mapper.mapping.names import ros_name_problem
-from airsim_mapper.scene import SIM_IMAGE_LEAVES, Scene
+from airsim_mapper.scene import Scene
 
 Element = tuple[str, dict[str, str], dict[str, Any]]  # (name key, variables, source)
 

@@ -10,21 +10,14 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from airsim_mapper.image_types import SEED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.model import Limits, Mapping, Options, Rule, TfSpec
 from airsim_mapper.mapping.schema import schema_problems
 from airsim_mapper.mapping.yamlmarks import load_marked
 
-DEFAULT_IMAGE_TYPES: dict[int, str] = {
-    0: "scene_camera",
-    1: "depth_planar_camera",
-    2: "depth_camera",
-    3: "segmentation_camera",
-    4: "depth_vis_camera",
-    5: "disparity_normalized_camera",
-    6: "surface_normals",
-}
+DEFAULT_IMAGE_TYPES: dict[int, str] = dict(SEED_IMAGE_TYPES)
 OPTION_KEYS = ("queue_size", "latch", "lazy", "rate_limit_hz", "stamp", "enabled", "watchdog_s")
 LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "on_violation")
 

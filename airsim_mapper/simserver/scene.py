@@ -18,17 +18,10 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
+from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
-IMAGE_TYPE_NAMES = {
-    0: "scene_camera",
-    1: "depth_planar_camera",
-    2: "depth_camera",
-    3: "segmentation_camera",
-    4: "depth_vis_camera",
-    5: "disparity_normalized_camera",
-    6: "surface_normals_camera",
-}
+IMAGE_TYPE_NAMES = SIM_IMAGE_LEAVES
 DISPARITY_NORMALIZED = 5
 
 SENSOR_LEAVES = {
