@@ -127,7 +127,7 @@ class _Checker:
                     )
         if rule.ros is not None and not template.malformed(rule.ros):
             sample = template.PLACEHOLDER.sub(
-                lambda m: "" if m.group(1) == "namespace" else SAMPLE_VALUE, rule.ros
+                lambda m: "" if m.group(1) in ("namespace", "frame_prefix") else SAMPLE_VALUE, rule.ros
             )
             why = ros_name_problem(sample)
             if why:

@@ -100,7 +100,7 @@ def elements(
     rule: Rule, mapping: MappingDoc, scene: Scene, node_name: str, namespace: str
 ) -> Iterator[Element]:
     """The scene elements `rule` expands over, each with its name key, variables and source."""
-    base = {"node_name": node_name, "namespace": namespace}
+    base = {"node_name": node_name, **namespace_variables(namespace)}
     if rule.domain == "node":
         yield node_name, base, {}
         return
@@ -144,6 +144,12 @@ def _bridge(rule: Rule, key: str, variables: dict[str, str], source: dict[str, A
         source=MappingProxyType(source),
         ros_kind=rule.ros_kind,
     )
+
+
+def namespace_variables(namespace: str) -> dict[str, str]:
+    """<namespace> ("" or "/ns", a topic prefix) and <frame_prefix> ("" or "ns/") of a node's --namespace."""
+    ns = namespace.strip("/")
+    return {"namespace": f"/{ns}" if ns else "", "frame_prefix": f"{ns}/" if ns else ""}
 
 
 def expand(mapping: MappingDoc, scene: Scene, node_name: str, namespace: str = "") -> tuple[BridgeSpec, ...]:

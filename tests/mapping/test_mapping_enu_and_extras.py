@@ -55,7 +55,7 @@ def test_enu_mapping_uses_rep103_frame_names(enu_mapping, scenes):
     assert ros["/airsim_streaming_camera/image_raw"].frame_id == "Drone1/Chase/scene_camera_optical"
     assert ros[f"{robot}/lidar1/lidar"].frame_id == "Drone1/lidar1"
     assert ros[f"{robot}/IMU1/imu"].frame_id == "Drone1/base_link"
-    assert dict(ros[f"{robot}/odom"].params) == {"child_frame_id": "<robot_name>/base_link"}
+    assert dict(ros[f"{robot}/odom"].params) == {"child_frame_id": "<frame_prefix><robot_name>/base_link"}
     tf_only = sorted((b.converter, b.tf.child) for b in bridges if b.ros is None and "Chase" in b.tf.child)
     assert tf_only == [
         ("camera_optical_pose", "Drone1/Chase/scene_camera_optical"),

@@ -79,6 +79,7 @@ def test_camera_capture_bridges_carry_the_capture_setting_and_the_camera_mount(s
     assert dict(bridge.variables) == {
         "node_name": "n",
         "namespace": "",
+        "frame_prefix": "",
         "scene_name": "S",
         "robot_name": "R1",
         "camera_name": "Front",
@@ -164,3 +165,19 @@ def test_expansion_is_deterministic(scene):
     text = HEADER + rule("c", "camera_capture", "/<robot_name>/<camera_name>/<image_type>")
     mapping = load_mapping_text(text)
     assert expand(mapping, scene, "n") == expand(mapping, scene, "n")
+
+
+def test_a_namespace_prefixes_every_topic_and_frame_of_the_default_mapping():
+    from harness import ROOT
+
+    from airsim_mapper.mapping.expand import expand, namespace_variables
+    from airsim_mapper.mapping.loader import load_mapping
+    from airsim_mapper.scene import read_scene
+
+    assert namespace_variables("") == {"namespace": "", "frame_prefix": ""}
+    assert namespace_variables("/sim2/") == {"namespace": "/sim2", "frame_prefix": "sim2/"}
+    scene = read_scene(ROOT / "sim_config", "scene_two_drones.jsonc")
+    bridges = expand(load_mapping(ROOT / "mappings" / "default.yaml"), scene, "n", "sim2")
+    assert all(b.ros.startswith("/sim2/") for b in bridges if b.ros)
+    frames = [f for b in bridges for f in (b.frame_id, *((b.tf.parent, b.tf.child) if b.tf else ())) if f]
+    assert frames and all(f.startswith("sim2/") for f in frames)
