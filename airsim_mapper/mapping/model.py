@@ -40,7 +40,7 @@ DOMAIN_VARIABLES: dict[str, tuple[str, ...]] = {
         for kind in ("imu", "gps", "barometer", "magnetometer", "distance_sensor", "battery", "airspeed")
     },
 }
-# Every domain also has <frame_prefix>, the frame-id form of <namespace> ("" or "sim2/" for namespace "/sim2").
+# Every domain also has <frame_prefix>: the frame-id form of <namespace> ("" or "sim2/" for "/sim2").
 DOMAIN_VARIABLES = {
     domain: (names[0], names[1], "frame_prefix", *names[2:]) for domain, names in DOMAIN_VARIABLES.items()
 }
