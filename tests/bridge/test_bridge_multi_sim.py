@@ -29,10 +29,24 @@ def test_two_simulators_share_one_master_without_name_collisions(rig_factory):
         node_name="bridge_sim2",
         wait_for="/sim2/airsim_node/Drone2/actual_pose",
     )
-    topics = published_topics()
-    assert "/sim1/airsim_node/Drone1/lidar1/lidar" in topics
-    assert "/sim2/airsim_node/Drone1/FrontCamera/scene_camera/image" in topics
-    assert not any(t.startswith("/airsim_node/") for t in topics)  # nothing left un-namespaced
+    expected = [
+        "/sim1/airsim_node/Drone1/lidar1/lidar",
+        "/sim2/airsim_node/Drone1/FrontCamera/scene_camera/image",
+    ]
+    wait_until(lambda: all(t in published_topics() for t in expected), 30, what="both nodes' topics")
+    import rosgraph
+
+    pubs, _subs, _srvs = rosgraph.Master("/probe").getSystemState()
+    ours = {t for t, nodes in pubs if {"/bridge_sim1", "/bridge_sim2"} & set(nodes)}
+    assert {t for t in ours if t.startswith("/sim1/")} and {t for t in ours if t.startswith("/sim2/")}
+    # nothing of either node is left un-namespaced (only the node-private status and /diagnostics, /tf)
+    assert {t for t in ours if not t.startswith(("/sim1/", "/sim2/"))} <= {
+        "/tf",
+        "/diagnostics",
+        "/rosout",
+        "/airsim_mapper/bridge_sim1/status",
+        "/airsim_mapper/bridge_sim2/status",
+    }
     # The same robot name in both simulators, each with its own pose and frames.
     poses = {
         ns: rospy.wait_for_message(f"/{ns}/airsim_node/Drone1/actual_pose", PoseStamped, timeout=20)
