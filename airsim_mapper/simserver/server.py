@@ -10,7 +10,7 @@ from typing import Any
 
 from airsim_mapper.simserver.scene import SceneError, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
-from airsim_mapper.simserver.session import Session, TrajectoryStore
+from airsim_mapper.simserver.session import TRAJECTORY_KEYS, Session, TrajectoryStore
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import load_world
 
@@ -83,19 +83,7 @@ class SimServer:
         )
         self.table.register(
             f"{DEFAULT_SCENE_PREFIX}/ImportNEDTrajectory",
-            (
-                "traj_name",
-                "time",
-                "pose_x",
-                "pose_y",
-                "pose_z",
-                "pose_roll",
-                "pose_pitch",
-                "pose_yaw",
-                "vel_x_lin",
-                "vel_y_lin",
-                "vel_z_lin",
-            ),
+            ("traj_name", *TRAJECTORY_KEYS),
             self._default_import,
         )
 
