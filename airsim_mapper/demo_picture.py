@@ -8,15 +8,9 @@ from typing import Any
 
 import numpy as np
 
-IMAGE_TYPES = (
-    "scene_camera",
-    "depth_planar_camera",
-    "depth_camera",
-    "segmentation_camera",
-    "depth_vis_camera",
-    "disparity_normalized_camera",
-    "surface_normals",
-)
+from airsim_mapper.image_types import SEED_IMAGE_TYPES
+
+IMAGE_TYPES = tuple(SEED_IMAGE_TYPES.values())  # the default mapping's <image_type> names
 
 
 def image_array(msg: Any) -> np.ndarray:

@@ -108,14 +108,8 @@ class Bench:
 
     # -- the bridge
 
-    @contextlib.contextmanager
-    def bridge_session(
-        self,
-        scene_file: str,
-        fast_frames: bool | str = True,
-        profile: str | None = None,
-        node_args: Sequence[str] = (),
-    ) -> Iterator[Session]:
+    def _replay_server(self, log_level: str) -> tuple[Child, int, int]:
+        """Start the replay server on free ports: (process, topics port, services port)."""
         topics_port, services_port = free_port(), free_port()
         server = self.procs.python(
             "replay_server",
@@ -127,8 +121,19 @@ class Bench:
             "--servicesport",
             str(services_port),
             "--log-level",
-            "WARNING",
+            log_level,
         )
+        return server, topics_port, services_port
+
+    @contextlib.contextmanager
+    def bridge_session(
+        self,
+        scene_file: str,
+        fast_frames: bool | str = True,
+        profile: str | None = None,
+        node_args: Sequence[str] = (),
+    ) -> Iterator[Session]:
+        server, topics_port, services_port = self._replay_server("WARNING")
         node: Child | None = None
         try:
             wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
@@ -159,19 +164,7 @@ class Bench:
 
     def client_pose_run(self, scene_file: str, pose: str, camera: str, fast_frames: bool) -> dict[str, Any]:
         """Pose through the bare client (no bridge, no ROS), idle then under camera load."""
-        topics_port, services_port = free_port(), free_port()
-        server = self.procs.python(
-            "replay_server",
-            "airsim_mapper.bench.replay_server",
-            "--address",
-            "127.0.0.1",
-            "--topicsport",
-            str(topics_port),
-            "--servicesport",
-            str(services_port),
-            "--log-level",
-            "ERROR",
-        )
+        server, topics_port, services_port = self._replay_server("ERROR")
         out = self.workdir / f"client_pose_{int(fast_frames)}.json"
         probe: Child | None = None
         try:

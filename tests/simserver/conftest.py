@@ -25,3 +25,11 @@ def shared_simserver(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SimSe
     finally:
         launcher.stop_all()
         print(launcher.dump_logs())
+
+
+@pytest.fixture
+def client(shared_simserver: SimServer):
+    """A connected 1.1.0 client on the module's server, disconnected at teardown."""
+    client = shared_simserver.client()
+    yield client
+    client.disconnect()

@@ -64,22 +64,8 @@ def sensors_drone(scene: str, name: str) -> set[str]:
 
 
 def lidar_drone(scene: str, name: str) -> set[str]:
-    """robot_quadrotor_fastphysics_lidar: Chase scene, DownCamera scene + depth, IMU1, lidar1 (GPS off)."""
-    return (
-        robot(scene, name)
-        | sensor(scene, name, "Chase", "scene_camera", "scene_camera_info")
-        | sensor(
-            scene,
-            name,
-            "DownCamera",
-            "scene_camera",
-            "scene_camera_info",
-            "depth_camera",
-            "depth_camera_info",
-        )
-        | sensor(scene, name, "IMU1", "imu_kinematics")
-        | sensor(scene, name, "lidar1", "lidar")
-    )
+    """robot_quadrotor_fastphysics_lidar: the basic drone's topics plus lidar1 (its GPS is disabled)."""
+    return basic_drone(scene, name) | sensor(scene, name, "lidar1", "lidar")
 
 
 def radar_tower(scene: str, name: str) -> set[str]:

@@ -14,13 +14,6 @@ from simserver.clientkit import load_world, position, subscribe
 
 
 @pytest.fixture
-def client(shared_simserver):
-    client = shared_simserver.client()
-    yield client
-    client.disconnect()
-
-
-@pytest.fixture
 def drone(client):
     world = load_world(client, "scene_basic_drone.jsonc")
     drone = Drone(client, world, "Drone1")

@@ -12,13 +12,6 @@ from simserver.clientkit import load_world, scene_config
 from simserver.expected_topics import EXPECTED, ROBOTS
 
 
-@pytest.fixture
-def client(shared_simserver):
-    client = shared_simserver.client()
-    yield client
-    client.disconnect()
-
-
 @pytest.mark.parametrize("scene_file", sorted(EXPECTED))
 def test_world_and_drone_load_each_shared_scene_with_the_documented_topic_catalogue(client, scene_file):
     scene_id, expected = EXPECTED[scene_file]

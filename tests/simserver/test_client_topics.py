@@ -21,13 +21,6 @@ DOWN_WORLD = DOWN_ORIGIN + np.array([0.0, 0.0, -4.0])  # the drone starts at (0,
 
 
 @pytest.fixture
-def client(shared_simserver):
-    client = shared_simserver.client()
-    yield client
-    client.disconnect()
-
-
-@pytest.fixture
 def sensors_drone(client):
     world = load_world(client, "scene_drone_sensors.jsonc")
     return world, Drone(client, world, "Drone1")
