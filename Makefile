@@ -3,8 +3,9 @@ SHELL := /bin/bash
 PY := .venv/bin/python
 DEMO_SECONDS ?= 30
 SOAK_SECONDS ?= 600
+SCREENSHOT ?= docs/rviz.png
 
-.PHONY: setup test lint demo bench soak clean
+.PHONY: setup test lint demo bench soak screenshot clean
 
 setup:
 	@bash tools/setup.sh
@@ -25,6 +26,9 @@ bench: setup
 
 soak: setup
 	@SOAK_SECONDS=$(SOAK_SECONDS) $(PY) -m airsim_mapper.soak
+
+screenshot: setup
+	@$(PY) -m airsim_mapper.screenshot --out $(SCREENSHOT)
 
 clean:
 	rm -rf .venv out bench/results.json .pytest_cache .ruff_cache

@@ -26,6 +26,7 @@ from typing import Any
 from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
 from airsim_mapper.engine.health import PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.realtime import tune_process
 from airsim_mapper.engine.ros_link import TfBroadcaster
 from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
@@ -57,6 +58,7 @@ class Engine:
         load_world: Callable[[Any, str, str], Any] | None = None,
         client_factory: Callable[[], Any] | None = None,
     ) -> None:
+        tune_process()
         self.client = client
         self.mapping = mapping
         self.sim_config_path = str(sim_config_path)
@@ -291,6 +293,7 @@ class Engine:
                 "handled": s.stats.handled,
                 "errors": s.stats.errors,
                 "age_s": round(now - s.stats.last_receive, 3) if s.stats.last_receive else None,
+                **s.stats.take_peaks(),
             }
             for topic, s in self.hub.streams().items()
         }

@@ -2,7 +2,9 @@
 
 Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale), reconnects, sim_losses,
 master_reregistrations, and per simulator topic stream: received, dropped, handled, errors, age_s
-(seconds since its last message). Published on every state change and once a second.
+(seconds since its last message), and the peaks since the previous status: arrival_gap_max_ms (longest
+interval between two arrivals), wait_max_ms (longest wait for the worker), handle_max_ms (longest
+handling). Published on every state change and once a second.
 """
 
 from __future__ import annotations

@@ -29,6 +29,20 @@ class StreamStats:
     handled: int = 0
     errors: int = 0
     last_receive: float = 0.0  # time.monotonic() of the newest message
+    # Peaks since the last `take_peaks()` (seconds): they tell where a stall came from.
+    arrival_gap_max: float = 0.0  # between two arrivals: the simulator, the wire or the receive loop
+    wait_max: float = 0.0  # a message waiting in the slot for the worker: scheduling, the GIL
+    handle_max: float = 0.0  # one run of all handlers: conversion and publishing
+
+    def take_peaks(self) -> dict[str, float]:
+        """The peaks in milliseconds, reset for the next window."""
+        peaks = {
+            "arrival_gap_max_ms": round(self.arrival_gap_max * 1000, 1),
+            "wait_max_ms": round(self.wait_max * 1000, 1),
+            "handle_max_ms": round(self.handle_max * 1000, 1),
+        }
+        self.arrival_gap_max = self.wait_max = self.handle_max = 0.0
+        return peaks
 
 
 @dataclass
@@ -50,11 +64,15 @@ class Stream:
 
     def offer(self, _topic_info: Any, message: Any) -> None:
         """Client receive-thread callback: store the message and wake the worker. Never blocks or raises."""
+        now = time.monotonic()
         with self._cond:
-            self.stats.received += 1
-            self.stats.last_receive = time.monotonic()
+            stats = self.stats
+            if stats.last_receive:
+                stats.arrival_gap_max = max(stats.arrival_gap_max, now - stats.last_receive)
+            stats.received += 1
+            stats.last_receive = now
             if self._has_pending:
-                self.stats.dropped += 1
+                stats.dropped += 1
             self._pending = message
             self._has_pending = True
             self._cond.notify()
@@ -68,6 +86,8 @@ class Stream:
                     return
                 message, self._pending, self._has_pending = self._pending, None, False
                 handlers = list(self.handlers)
+                arrived = self.stats.last_receive
+            start = time.monotonic()
             transforms: list = []
             for handler in handlers:
                 try:
@@ -81,7 +101,10 @@ class Stream:
                 except Exception:
                     self.stats.errors += 1
                     log.exception("tf for %s failed", self.topic)
-            self.stats.handled += 1
+            stats = self.stats
+            stats.handled += 1
+            stats.wait_max = max(stats.wait_max, start - arrived)
+            stats.handle_max = max(stats.handle_max, time.monotonic() - start)
 
     def stop(self) -> None:
         with self._cond:

@@ -17,6 +17,7 @@ from typing import Any
 import pynng
 
 from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.outbox import Outbox
 
 LOG = logging.getLogger("airsim_mapper.simserver.topics")
 
@@ -64,7 +65,7 @@ class TopicHub:
         self._socket.add_post_pipe_remove_cb(self._on_pipe_removed)
         self._pipes: set[int] = set()
         self._lock = threading.RLock()
-        self._send_lock = threading.Lock()
+        self._outbox = Outbox(self._write)
         self._table: dict[str, TopicInfo] = {}
         self._subscribed: set[str] = set()
         self._cache: dict[str, bytes] = {}
@@ -81,6 +82,7 @@ class TopicHub:
     def stop(self) -> None:
         self._stopping.set()
         self._thread.join(timeout=2.0)
+        self._outbox.close()
         self._socket.close()
 
     # -- table
@@ -145,10 +147,12 @@ class TopicHub:
         return all_known
 
     def _send(self, path: str, body: bytes) -> None:
-        frame = protocol.encode_frame(path, body)
+        self._outbox.put(path, protocol.encode_frame(path, body))
+
+    def _write(self, path: str, frame: bytes) -> None:
+        """The outbox's sender thread: one frame onto the socket."""
         try:
-            with self._send_lock:
-                self._socket.send(frame)
+            self._socket.send(frame)
         except pynng.Timeout:
             LOG.warning("dropped a message on %s: the client is not reading", path)
         except pynng.NNGException as exc:

@@ -1,0 +1,59 @@
+"""Process settings that keep message latency low while other threads convert images and clouds.
+
+First, one BLAS thread (`airsim_mapper.blas`): numpy's idle OpenBLAS workers otherwise spin on
+`sched_yield` and take a core from everything else on a small machine.
+
+Then the GIL. A Python thread that blocks (a socket send, a sleep) gives up the GIL; while a CPU-bound
+thread runs, getting it back takes up to the switch interval, 5 ms by default. A thread that blocks once
+per message, like a receive loop or a publisher, is then held to about 200 messages a second, and a pose
+that fans out to several topics waits a switch interval per topic. Two settings fix this:
+
+- a shorter switch interval (0.5 ms), so a waiting thread gets the GIL back sooner;
+- `PromptQueuedConnection`: rospy's queued connection without its `time.sleep(0)` after every enqueue.
+
+The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns them off for comparison.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import rospy
+import rospy.topics
+from rospy.impl.tcpros_pubsub import QueuedConnection
+
+from airsim_mapper.blas import limit_blas_threads
+
+SWITCH_INTERVAL_S = 0.0005
+
+
+class PromptQueuedConnection(QueuedConnection):
+    """rospy's queued publisher connection without the `time.sleep(0)` after each enqueue.
+
+    rospy ends every queued `write_data` with `time.sleep(0)` to let the connection's writer thread run.
+    That gives up the GIL once per publish and subscriber; with busy threads in the process, getting it
+    back costs up to a switch interval (5 ms) each time, so a pose message that fans out to six topics
+    waited tens of milliseconds between its own publishes (see the README's reliability section). Without
+    the yield the writer thread still wakes on the condition and sends as soon as it holds the GIL.
+    """
+
+    def write_data(self, data: bytes) -> bool:
+        with self._lock:
+            if self._error:
+                error, self._error = self._error, None
+                raise error
+            if self._queue_size > 0 and len(self._queue) == self._queue_size:
+                del self._queue[0]
+            self._queue.append(data)
+            self._cond_data_available.notify()
+        return True
+
+
+def tune_process(switch_interval_s: float = SWITCH_INTERVAL_S) -> None:
+    """Apply the settings to this process (idempotent; the engine calls it, so the node and the wrapper)."""
+    if os.environ.get("AIRSIM_MAPPER_NO_TUNING"):  # A/B comparisons in the soak
+        return
+    limit_blas_threads(1)
+    sys.setswitchinterval(min(sys.getswitchinterval(), switch_interval_s))
+    rospy.topics.QueuedConnection = PromptQueuedConnection

@@ -1,0 +1,550 @@
+"""`make screenshot`: RViz on the live stack under Xvfb, captured to a PNG.
+
+Starts Xvfb on a display it picks itself, a private roscore, and `launch/rviz.launch` (headless server,
+bridge + hello mission, radar markers, RViz with `rviz/airsim_mapper.rviz`). It waits until RViz has
+subscribed to every topic of its config and images, lidar clouds and radar markers are flowing, lets RViz
+render for a few seconds, waits (30 s at most) until the drone is on its way out to the ball, then copies
+the X screen (Xvfb's `-fbdir` framebuffer, an XWD file) to a PNG. Everything it started is stopped at
+the end, whatever happened. `--report` writes what it saw (from the master and from real messages) as JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import math
+import os
+import select
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import zlib
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+CONFIG = ROOT / "rviz" / "airsim_mapper.rviz"
+LAUNCH = ROOT / "launch" / "rviz.launch"
+IMAGE_TOPIC = "/airsim_node/Drone1/Chase/scene_camera/image"
+LIDAR_TOPIC = "/airsim_node/Drone1/lidar1/lidar"
+MARKER_TOPIC = "/airsim_node/Drone1/radar1/radar_markers"
+ODOM_TOPIC = "/airsim_node/Drone1/odom"
+TF_TOPICS = ("/tf", "/tf_static")
+TOOLS = ("Xvfb", "roscore", "roslaunch", "rviz")
+QT_OVERRIDES = ("QT_QPA_PLATFORM_PLUGIN_PATH", "QT_PLUGIN_PATH", "QT_QPA_FONTDIR", "QT_QPA_PLATFORM")
+
+
+class ScreenshotError(RuntimeError):
+    """The screenshot could not be taken (the message says which part failed)."""
+
+
+# -- images -----------------------------------------------------------------------------------------------
+
+
+def read_xwd(path: Path) -> np.ndarray:
+    """(H, W, 3) uint8 RGB of a 24/32-bit TrueColor XWD file (what Xvfb -fbdir maps)."""
+    raw = Path(path).read_bytes()
+    if len(raw) < 100:
+        raise ScreenshotError(f"{path}: not an XWD file ({len(raw)} bytes)")
+    head = struct.unpack(">25I", raw[:100])
+    header_size, version, pixmap_format, _depth, width, height = head[:6]
+    byte_order, bits_per_pixel, bytes_per_line = head[7], head[11], head[12]
+    masks, ncolors = head[14:17], head[19]
+    if version != 7 or pixmap_format != 2 or bits_per_pixel != 32:
+        raise ScreenshotError(
+            f"{path}: unsupported XWD (version {version}, format {pixmap_format}, {bits_per_pixel} bpp)"
+        )
+    offset = header_size + 12 * ncolors
+    if len(raw) < offset + height * bytes_per_line:
+        raise ScreenshotError(f"{path}: truncated XWD")
+    words = np.frombuffer(
+        raw, dtype="<u4" if byte_order == 0 else ">u4", count=height * bytes_per_line // 4, offset=offset
+    )
+    pixels = words.reshape(height, bytes_per_line // 4)[:, :width]
+    channels = []
+    for mask in masks:
+        shift = (mask & -mask).bit_length() - 1
+        channels.append(((pixels & mask) >> shift).astype(np.uint8))
+    return np.stack(channels, axis=-1)
+
+
+def write_png(path: Path, rgb: np.ndarray) -> None:
+    """Write an (H, W, 3) uint8 array as an 8-bit RGB PNG (zlib, no filter: small for flat UI images)."""
+    height, width, _ = rgb.shape
+    rows = np.concatenate(
+        [np.zeros((height, 1), np.uint8), np.ascontiguousarray(rgb).reshape(height, -1)], axis=1
+    )
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    body = chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows.tobytes(), 9)) + chunk(b"IEND", b"")
+    Path(path).write_bytes(b"\x89PNG\r\n\x1a\n" + body)
+
+
+def image_stats(rgb: np.ndarray) -> dict[str, float]:
+    """How much there is to see: pixel standard deviation and the number of distinct colours."""
+    flat = rgb.reshape(-1, 3).astype(np.uint32)
+    packed = (flat[:, 0] << 16) | (flat[:, 1] << 8) | flat[:, 2]
+    return {"std": float(rgb.std()), "colours": int(np.unique(packed).size)}
+
+
+# -- the RViz config --------------------------------------------------------------------------------------
+
+
+def config_topics(path: Path = CONFIG) -> dict[str, str]:
+    """Every topic the config's displays subscribe to, with the display class: {topic: class}."""
+    import yaml
+
+    config = yaml.safe_load(Path(path).read_text())
+    found: dict[str, str] = {}
+
+    def walk(displays: Iterable[Any]) -> None:
+        for display in displays or ():
+            for key, value in display.items():
+                if key.endswith("Topic") and isinstance(value, str) and value:
+                    found[value] = display["Class"]
+            walk(display.get("Displays", ()))
+
+    walk(config["Visualization Manager"]["Displays"])
+    return found
+
+
+def config_frames(path: Path = CONFIG) -> set[str]:
+    """The tf frames the config's TF displays enable by name, plus the fixed frame."""
+    import yaml
+
+    config = yaml.safe_load(Path(path).read_text())
+    manager = config["Visualization Manager"]
+    frames = {manager["Global Options"]["Fixed Frame"]}
+    for display in manager["Displays"]:
+        if display["Class"] == "rviz/TF":
+            frames |= {
+                k for k, v in display.get("Frames", {}).items() if isinstance(v, dict) and v.get("Value")
+            }
+    return frames
+
+
+# -- processes --------------------------------------------------------------------------------------------
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def _children_of(pids: set[int]) -> set[int]:
+    """Every live descendant of `pids` (read from /proc; roslaunch puts its nodes in their own sessions)."""
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError, ValueError, IndexError):
+                stat = (entry / "stat").read_text()
+                parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    found: set[int] = set()
+    frontier = set(pids)
+    while frontier:
+        frontier = {pid for pid, ppid in parents.items() if ppid in frontier and pid not in found}
+        found |= frontier
+    return found
+
+
+@dataclass
+class Child:
+    """A process in its own session, its output in a log file."""
+
+    name: str
+    popen: subprocess.Popen
+    log: Path
+
+    def alive(self) -> bool:
+        return self.popen.poll() is None
+
+    def stop(self, grace_s: float = 30.0) -> None:
+        """SIGINT (roslaunch then stops its nodes), wait, then SIGKILL whatever is left of the tree."""
+        tree = _children_of({self.popen.pid})
+        if self.alive():
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.popen.pid, signal.SIGINT)
+            try:
+                self.popen.wait(timeout=grace_s)
+            except subprocess.TimeoutExpired:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(self.popen.pid, signal.SIGKILL)
+                self.popen.wait(timeout=10)
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(self.popen.pid, signal.SIGKILL)
+        for pid in tree | _children_of(tree):
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, signal.SIGKILL)
+
+
+@dataclass
+class RvizStack:
+    """Xvfb, a private roscore and launch/rviz.launch; a context manager that stops all of them."""
+
+    workdir: Path
+    width: int = 1280
+    height: int = 800
+    launch_args: Sequence[str] = ()
+    children: list[Child] = field(default_factory=list)
+    display: str = ""
+    env: dict[str, str] = field(default_factory=dict)
+    master_uri: str = ""
+    sim_ports: tuple[int, int] = (0, 0)  # the headless server's topics and services ports
+
+    def __enter__(self) -> RvizStack:
+        try:
+            self.start()
+        except BaseException:
+            self.stop()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    @property
+    def framebuffer(self) -> Path:
+        return self.workdir / "fb" / "Xvfb_screen0"
+
+    def spawn(self, name: str, argv: Sequence[str], **kwargs: Any) -> Child:
+        log = self.workdir / f"{name}.log"
+        with open(log, "wb") as out:
+            popen = subprocess.Popen(
+                list(argv),
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                env=self.env,
+                cwd=self.workdir,
+                start_new_session=True,
+                **kwargs,
+            )
+        child = Child(name, popen, log)
+        self.children.append(child)
+        return child
+
+    def start(self) -> None:
+        missing = [tool for tool in TOOLS if shutil.which(tool) is None]
+        if missing:
+            raise ScreenshotError(f"missing {', '.join(missing)}: run `make setup`")
+        self.workdir.mkdir(parents=True, exist_ok=True)
+        for sub in ("fb", "xdg", "home", "ros_home"):
+            (self.workdir / sub).mkdir(mode=0o700, exist_ok=True)
+        venv_bin = Path(sys.executable).parent
+        ros_port = free_port()
+        self.master_uri = f"http://localhost:{ros_port}"
+        self.env = {
+            **os.environ,
+            "ROS_MASTER_URI": self.master_uri,
+            "ROS_HOSTNAME": "localhost",
+            "ROS_LOG_DIR": str(self.workdir / "ros_log"),
+            "ROS_HOME": str(self.workdir / "ros_home"),
+            "ROS_PACKAGE_PATH": f"{ROOT}:/usr/share",
+            "PATH": f"{venv_bin}{os.pathsep}{os.environ.get('PATH', '')}",
+            "PYTHONUNBUFFERED": "1",
+            "LIBGL_ALWAYS_SOFTWARE": "1",
+            "XDG_RUNTIME_DIR": str(self.workdir / "xdg"),
+            "HOME": str(self.workdir / "home"),  # RViz keeps its recent-configs file under ~/.rviz
+        }
+        self.env.pop("ROS_IP", None)
+        for key in QT_OVERRIDES:  # e.g. set by importing cv2: would point RViz at opencv's own Qt plugins
+            self.env.pop(key, None)
+        self.display = self.start_xvfb()
+        self.env["DISPLAY"] = self.display
+        master = self.spawn("roscore", ["roscore", "-p", str(ros_port)])
+        wait_for(lambda: self.master_pid() is not None, 60, "roscore", master)
+        self.sim_ports = (free_port(), free_port())
+        topics_port, services_port = self.sim_ports
+        self.spawn(
+            "roslaunch",
+            [
+                "roslaunch",
+                str(LAUNCH),
+                f"topicsport:={topics_port}",
+                f"servicesport:={services_port}",
+                *self.launch_args,
+            ],
+        )
+
+    def start_xvfb(self) -> str:
+        """Xvfb on a display it chooses itself (-displayfd), its screen mapped to a file (-fbdir)."""
+        read_fd, write_fd = os.pipe()
+        try:
+            xvfb = self.spawn(
+                "xvfb",
+                [
+                    "Xvfb",
+                    "-displayfd",
+                    str(write_fd),
+                    "-screen",
+                    "0",
+                    f"{self.width}x{self.height}x24",
+                    "-fbdir",
+                    str(self.workdir / "fb"),
+                    "-nolisten",
+                    "tcp",
+                    "-nocursor",
+                    "-noreset",
+                ],
+                pass_fds=(write_fd,),
+            )
+            os.close(write_fd)
+            write_fd = -1
+            data = b""
+            deadline = time.monotonic() + 30
+            while not data.endswith(b"\n") and time.monotonic() < deadline:  # "<number>\n", maybe in parts
+                ready, _, _ = select.select([read_fd], [], [], max(0.0, deadline - time.monotonic()))
+                chunk = os.read(read_fd, 64) if ready else b""
+                if not chunk:
+                    break
+                data += chunk
+            number = data.decode().strip()
+        finally:
+            os.close(read_fd)
+            if write_fd >= 0:
+                os.close(write_fd)
+        if not number.isdigit():
+            raise ScreenshotError(f"Xvfb did not start; see {xvfb.log}")
+        return f":{number}"
+
+    def master_pid(self) -> int | None:
+        import rosgraph
+
+        try:
+            return rosgraph.Master("/rviz_screenshot", master_uri=self.master_uri).getPid()
+        except Exception:
+            return None
+
+    def system_state(self) -> tuple[list, list, list]:
+        import rosgraph
+
+        return rosgraph.Master("/rviz_screenshot", master_uri=self.master_uri).getSystemState()
+
+    def subscriptions_of(self, node_prefix: str = "/rviz") -> set[str]:
+        """The topics a node (by name prefix) subscribes to, from the master."""
+        _, subscribers, _ = self.system_state()
+        return {topic for topic, nodes in subscribers if any(n.startswith(node_prefix) for n in nodes)}
+
+    def publishers_of(self, topic: str) -> list[str]:
+        publishers, _, _ = self.system_state()
+        return next((nodes for name, nodes in publishers if name == topic), [])
+
+    def rviz_alive(self) -> bool:
+        """The RViz process is running (pgrep on this stack's display would also find other sessions)."""
+        launch = next(c for c in self.children if c.name == "roslaunch")
+        for pid in _children_of({launch.popen.pid}):
+            with contextlib.suppress(OSError):
+                if Path(f"/proc/{pid}/comm").read_text().strip() == "rviz":
+                    return True
+        return False
+
+    def check_running(self) -> None:
+        for child in self.children:
+            if not child.alive():
+                raise ScreenshotError(f"{child.name} exited early; see {child.log}:\n{tail(child.log)}")
+
+    def capture(self, out: Path) -> dict[str, float]:
+        """The X screen as a PNG; returns its image statistics."""
+        rgb = read_xwd(self.framebuffer)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        write_png(out, rgb)
+        return image_stats(rgb)
+
+    def stop(self) -> None:
+        for child in reversed(self.children):
+            child.stop()
+
+
+def tail(path: Path, lines: int = 25) -> str:
+    with contextlib.suppress(OSError):
+        return "\n".join(path.read_text(errors="replace").splitlines()[-lines:])
+    return ""
+
+
+def wait_for(predicate: Any, timeout: float, what: str, child: Child | None = None) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if child is not None and not child.alive():
+            raise ScreenshotError(f"{child.name} exited early; see {child.log}:\n{tail(child.log)}")
+        if predicate():
+            return
+        time.sleep(0.25)
+    raise ScreenshotError(f"timed out after {timeout:.0f} s waiting for {what}")
+
+
+# -- watching the data ------------------------------------------------------------------------------------
+
+
+@dataclass
+class Watch:
+    """Counts messages on the topics RViz shows; keeps the latest radar marker and drone position."""
+
+    counts: dict[str, int] = field(default_factory=dict)
+    marker_points: int = 0
+    marker_frame: str = ""
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    receding: bool = False  # the last odometry message was farther from the pad than the one before
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def start(self, topics: Iterable[str]) -> None:
+        import rospy
+        from nav_msgs.msg import Odometry
+        from visualization_msgs.msg import MarkerArray
+
+        for topic in topics:
+            cls = {MARKER_TOPIC: MarkerArray, ODOM_TOPIC: Odometry}.get(topic, rospy.AnyMsg)
+            rospy.Subscriber(topic, cls, self.on_message, callback_args=topic, queue_size=1)
+
+    def on_message(self, msg: Any, topic: str) -> None:
+        with self.lock:
+            self.counts[topic] = self.counts.get(topic, 0) + 1
+            if topic == MARKER_TOPIC:
+                points = sum(len(m.points) for m in msg.markers)
+                if points:
+                    self.marker_points = points
+                    self.marker_frame = msg.markers[0].header.frame_id
+            elif topic == ODOM_TOPIC:
+                p = msg.pose.pose.position
+                self.receding = math.hypot(p.x, p.y) > math.hypot(*self.position[:2])
+                self.position = (p.x, p.y, p.z)
+
+    def away(self, metres: float) -> bool:
+        """The drone is at least `metres` from the pad (horizontally) and still flying away from it."""
+        with self.lock:
+            return math.hypot(*self.position[:2]) >= metres and self.receding
+
+    def flowing(self, topics: Iterable[str], at_least: int) -> bool:
+        with self.lock:
+            return all(self.counts.get(t, 0) >= at_least for t in topics) and self.marker_points > 0
+
+
+@dataclass
+class Options:
+    """The command line: where to write, how long to wait, the screen size."""
+
+    out: Path
+    report: Path | None = None
+    settle_s: float = 6.0
+    away_m: float = 8.0
+    timeout_s: float = 120.0
+    width: int = 1280
+    height: int = 800
+    keep: Path | None = None
+
+
+def take(options: Options) -> dict[str, Any]:
+    """Run the stack, wait for the data and for RViz, capture the screen; return the report."""
+    workdir = options.keep or Path(tempfile.mkdtemp(prefix="airsim-mapper-rviz-"))
+    wanted = config_topics()
+    ok = False
+    try:
+        with RvizStack(workdir, options.width, options.height) as stack:
+            print(
+                f"screenshot: Xvfb {stack.display}, roscore {stack.master_uri}, logs in {workdir}", flush=True
+            )
+            os.environ.update(
+                {k: stack.env[k] for k in ("ROS_MASTER_URI", "ROS_HOSTNAME", "ROS_LOG_DIR", "ROS_HOME")}
+            )
+            import rospy
+
+            rospy.init_node("rviz_screenshot", anonymous=True, disable_signals=True)
+            watch = Watch()
+            flowing = (IMAGE_TOPIC, LIDAR_TOPIC, MARKER_TOPIC, ODOM_TOPIC)
+            watch.start(flowing)
+            needed = set(wanted) | set(TF_TOPICS)
+
+            def ready() -> bool:
+                stack.check_running()
+                return watch.flowing(flowing, 3) and needed <= stack.subscriptions_of("/rviz")
+
+            wait_for(ready, options.timeout_s, "RViz's subscriptions and images, lidar and radar markers")
+            print(f"screenshot: data flowing; letting RViz render for {options.settle_s:.0f} s", flush=True)
+            time.sleep(options.settle_s)
+            # Mid-flight looks best: wait (briefly) until the drone is on its way out to the ball.
+            if options.away_m > 0:
+                with contextlib.suppress(ScreenshotError):
+                    wait_for(lambda: watch.away(options.away_m), 30, f"the drone {options.away_m:.0f} m out")
+            stack.check_running()
+            stats = stack.capture(options.out)
+            report = {
+                "png": str(options.out),
+                "size": [options.width, options.height],
+                "display": stack.display,
+                "master_uri": stack.master_uri,
+                "sim_ports": list(stack.sim_ports),
+                "rviz_alive": stack.rviz_alive(),
+                "rviz_subscriptions": sorted(stack.subscriptions_of("/rviz")),
+                "config_topics": wanted,
+                "marker_publishers": stack.publishers_of(MARKER_TOPIC),
+                "messages": dict(watch.counts),
+                "radar_marker_points": watch.marker_points,
+                "radar_marker_frame": watch.marker_frame,
+                "drone_position_ned": list(watch.position),
+                "image": stats,
+            }
+            rospy.signal_shutdown("screenshot taken")
+        ok = True
+    finally:
+        if options.keep is None and ok:  # a failed run keeps its logs for the error message
+            shutil.rmtree(workdir, ignore_errors=True)
+    if options.report is not None:
+        options.report.parent.mkdir(parents=True, exist_ok=True)
+        options.report.write_text(json.dumps(report, indent=2) + "\n")
+    return report
+
+
+def parse_args(argv: Sequence[str] | None) -> Options:
+    parser = argparse.ArgumentParser(
+        prog="python -m airsim_mapper.screenshot", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "--out", type=Path, default=ROOT / "out" / "rviz.png", help="the PNG (default out/rviz.png)"
+    )
+    parser.add_argument("--report", type=Path, help="also write what was seen as JSON")
+    parser.add_argument("--settle", type=float, default=6.0, help="seconds of rendering before the capture")
+    parser.add_argument(
+        "--away", type=float, default=8.0, help="then wait (30 s at most) until the drone is this far out, m"
+    )
+    parser.add_argument("--timeout", type=float, default=120.0, help="seconds to wait for RViz and the data")
+    parser.add_argument("--size", default="1280x800", help="screen size WIDTHxHEIGHT")
+    parser.add_argument(
+        "--keep", type=Path, help="keep the logs in this folder (default: a removed temp dir)"
+    )
+    args = parser.parse_args(argv)
+    width, height = (int(v) for v in args.size.lower().split("x"))
+    return Options(args.out, args.report, args.settle, args.away, args.timeout, width, height, args.keep)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    options = parse_args(argv)
+    try:
+        report = take(options)
+    except ScreenshotError as exc:
+        print(f"screenshot: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+    print(
+        f"screenshot: wrote {report['png']} ({report['size'][0]}x{report['size'][1]}, "
+        f"{report['image']['colours']} colours); radar markers: {report['radar_marker_points']} points"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
