@@ -2,8 +2,10 @@
 
 Starts a private roscore, the headless simulator and `scripts/hello_ros.py` (the mission flying Drone1
 while the bridge runs in the same process), subscribes to every topic that process publishes, and samples
-the process's RSS and thread count every few seconds. After a warm-up it reports delivered rates, the
-bridge's drop counts (from its status topic) and the largest gap between two actual_pose messages.
+the process's RSS and thread count every few seconds. A separate probe process receives actual_pose alone.
+After a warm-up it reports delivered rates, the bridge's drop counts and per-stream peaks (from its status
+topic), and the largest gaps between two actual_pose messages, as seen by the probe (the verdict) and by
+the monitor, with the sim-time step and the lateness across each (where the gap came from).
 
 Pass: RSS growth under 20 MB after warm-up, a thread count that stays within 2 of its post-warm-up value,
 no actual_pose gap over 100 ms. Exit code 0 on pass, 1 on fail. SOAK_SECONDS sets the length (600).
@@ -125,6 +127,7 @@ class Listener:
         self.status: dict = {}
         self.peaks: dict[str, dict[str, float]] = {}  # per simulator topic: the largest status peaks
         self.collect_peaks = False
+        self.gc_max_ms = 0.0  # the bridge's longest garbage collection after warm-up
         self._lock = threading.Lock()
         self._subs: list = []
 
@@ -138,7 +141,9 @@ class Listener:
             elif topic == POSE_TOPIC:
                 from geometry_msgs.msg import PoseStamped
 
-                self._subs.append(rospy.Subscriber(topic, PoseStamped, self._on_pose, queue_size=50))
+                self._subs.append(
+                    rospy.Subscriber(topic, PoseStamped, self._on_pose, queue_size=50, tcp_nodelay=True)
+                )
             else:
                 self._subs.append(rospy.Subscriber(topic, rospy.AnyMsg, self._counter(topic), queue_size=50))
 
@@ -161,6 +166,7 @@ class Listener:
         if not self.collect_peaks:
             return
         with self._lock:
+            self.gc_max_ms = max(self.gc_max_ms, self.status.get("gc_max_ms") or 0.0)
             for topic, stream in self.status.get("streams", {}).items():
                 mine = self.peaks.setdefault(topic, {})
                 for key, value in stream.items():
@@ -197,6 +203,7 @@ def explain_gaps(times: list[float], stamps: list[float], worst: int = 5) -> Non
     print("largest actual_pose gaps after warm-up (receive gap / sim-time step / lateness after, ms):")
     for i in np.argsort(gaps)[::-1][:worst]:
         print(f"  {gaps[i] * 1000:7.1f} / {steps[i] * 1000:7.1f} / {late[i + 1] * 1000:7.1f}")
+    print(f"gaps over 50 ms: {int((gaps > 0.05).sum())}, over 100 ms: {int((gaps > 0.1).sum())}")
     print(
         f"actual_pose lateness p50 / p99 / max: {np.percentile(late, 50) * 1000:.1f} / "
         f"{np.percentile(late, 99) * 1000:.1f} / {late.max() * 1000:.1f} ms"
@@ -251,8 +258,14 @@ def run(seconds: float, workdir: Path) -> int:
 
         rospy.init_node("soak_listener", anonymous=True, disable_signals=True)
         sys.setswitchinterval(0.0005)  # the monitor must not add its own GIL waits to the gaps it measures
+        from airsim_mapper.engine.realtime import GcPauses
+
+        own_gc = GcPauses()
         wait_for(lambda: POSE_TOPIC in node_topics(NODE), 60, "the bridge's topics")
         time.sleep(1.0)
+        probe_file = workdir / "pose_probe.txt"
+        probe_argv = [sys.executable, "-m", "airsim_mapper.soak", "--pose-probe", str(probe_file)]
+        probe = rig.start("pose_probe", probe_argv)
         listener = Listener()
         topics = node_topics(NODE)
         listener.attach(topics)
@@ -270,15 +283,25 @@ def run(seconds: float, workdir: Path) -> int:
                 counts_at_warmup = listener.snapshot()[0]
                 stamps_from = len(listener.snapshot()[2])
                 listener.collect_peaks = True
+                own_gc.take_peak_ms()
             print(f"  t={s.t:6.0f} s  rss={s.rss_mb:7.1f} MB  threads={s.threads}", flush=True)
             time.sleep(SAMPLE_PERIOD_S)
         counts, pose_times, pose_stamps = listener.snapshot()
+        os.killpg(probe.pid, signal.SIGINT)
+        probe.wait(timeout=30)
+        probe_times, probe_stamps = since(t0 + warmup, *read_probe(probe_file))
+        print("the pose probe (a process receiving actual_pose only):")
+        explain_gaps(probe_times, probe_stamps)
+        print("the monitor (its process also receives every other stream):")
         explain_gaps(pose_times[stamps_from:], pose_stamps[stamps_from:])
+        print(f"longest garbage collection after warm-up: bridge {listener.gc_max_ms:.1f} ms, ", end="")
+        print(f"this monitor {own_gc.take_peak_ms():.1f} ms (a pause here delays what it measures)")
         print("bridge stream peaks after warm-up (ms): arrival gap / wait for worker / handling")
         for topic, peaks in sorted(listener.peaks.items()):
             cells = [peaks.get(k, 0.0) for k in ("arrival_gap_max_ms", "wait_max_ms", "handle_max_ms")]
             print(f"  {cells[0]:7.1f} / {cells[1]:7.1f} / {cells[2]:7.1f}  {topic}")
-        return report(samples, warmup, t0, counts, counts_at_warmup, pose_times, listener.status, seconds)
+        poses = (probe_times, pose_times[stamps_from:])
+        return report(samples, warmup, t0, counts, counts_at_warmup, *poses, listener.status, seconds)
     finally:
         rig.stop_all()
         if "rospy" in sys.modules:
@@ -292,6 +315,7 @@ def report(
     counts: dict[str, int],
     counts_at_warmup: dict[str, int],
     pose_times: list[float],
+    monitor_pose_times: list[float],
     status: dict,
     seconds: float,
 ) -> int:
@@ -299,9 +323,9 @@ def report(
     verdict = Verdict()
     verdict.check(len(after) >= 2, f"run too short for a verdict after the {warmup:.0f} s warm-up")
     window = max(1e-9, seconds - warmup)
+    rates = {topic: (counts[topic] - counts_at_warmup.get(topic, 0)) / window for topic in sorted(counts)}
     print("delivered rates after warm-up (Hz):")
-    for topic in sorted(counts):
-        rate = (counts[topic] - counts_at_warmup.get(topic, 0)) / window
+    for topic, rate in rates.items():
         print(f"  {rate:8.1f}  {topic}")
     streams = status.get("streams", {})
     print("bridge streams (received / dropped):")
@@ -311,6 +335,7 @@ def report(
     summary = {
         "largest_pose_gap_ms": round(gap * 1000, 1),
         "p99_pose_gap_ms": round(gap_percentile(pose_times, t0 + warmup, 99) * 1000, 1),
+        "monitor_largest_pose_gap_ms": round(largest_gap(monitor_pose_times, t0 + warmup) * 1000, 1),
         "state": status.get("state"),
         "sim_losses": status.get("sim_losses"),
     }
@@ -325,6 +350,7 @@ def report(
         )
     verdict.check(gap <= POSE_GAP_LIMIT_S, f"largest actual_pose gap {gap * 1000:.0f} ms (limit 100)")
     print("summary: " + json.dumps(summary))
+    print("rates: " + json.dumps({topic: round(rate, 2) for topic, rate in rates.items()}))
     for failure in verdict.failures:
         print(f"FAIL: {failure}")
     print("PASS" if not verdict.failures else "FAIL", flush=True)
@@ -345,7 +371,45 @@ def _port_open(port: int) -> bool:
         return sock.connect_ex(("127.0.0.1", port)) == 0
 
 
+def pose_probe(out: Path) -> int:
+    """A process that only receives actual_pose (TCP_NODELAY) and writes `receive time, stamp` lines.
+
+    The gap verdict comes from here: the monitor above receives every image and cloud of the bridge, about
+    100 MB/s, and a pause of its own would count against the bridge.
+    """
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+
+    rospy.init_node("soak_pose_probe", anonymous=True, disable_signals=True)
+    sys.setswitchinterval(0.0005)
+    lines: list[str] = []
+
+    def on_pose(msg) -> None:
+        lines.append(f"{time.monotonic():.6f} {msg.header.stamp.to_sec():.6f}\n")
+
+    rospy.Subscriber(POSE_TOPIC, PoseStamped, on_pose, queue_size=100, tcp_nodelay=True)
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    while not stop.wait(1.0):
+        pass
+    out.write_text("".join(lines))
+    return 0
+
+
+def since(start: float, times: list[float], stamps: list[float]) -> tuple[list[float], list[float]]:
+    """The (receive time, stamp) pairs received at or after `start`."""
+    kept = [(t, st) for t, st in zip(times, stamps) if t >= start]
+    return [t for t, _ in kept], [st for _, st in kept]
+
+
+def read_probe(path: Path) -> tuple[list[float], list[float]]:
+    rows = [line.split() for line in path.read_text().splitlines()] if path.exists() else []
+    return [float(r[0]) for r in rows], [float(r[1]) for r in rows]
+
+
 def main() -> int:
+    if len(sys.argv) == 3 and sys.argv[1] == "--pose-probe":
+        return pose_probe(Path(sys.argv[2]))
     seconds = float(os.environ.get("SOAK_SECONDS", "600"))
     workdir = Path(tempfile.mkdtemp(prefix="airsim-mapper-soak-"))
     try:

@@ -26,7 +26,7 @@ from typing import Any
 from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
 from airsim_mapper.engine.health import PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
-from airsim_mapper.engine.realtime import tune_process
+from airsim_mapper.engine.realtime import GcPauses, tune_process
 from airsim_mapper.engine.ros_link import TfBroadcaster
 from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
@@ -59,6 +59,7 @@ class Engine:
         client_factory: Callable[[], Any] | None = None,
     ) -> None:
         tune_process()
+        self.gc_pauses = GcPauses()
         self.client = client
         self.mapping = mapping
         self.sim_config_path = str(sim_config_path)
@@ -304,6 +305,7 @@ class Engine:
             "scene": self.scene.file if self.scene else None,
             **self.counters,
             "bad_frames": self.sim.bad_frames,
+            "gc_max_ms": self.gc_pauses.take_peak_ms(),
             "streams": streams,
             "bridge_errors": errors,
         }
@@ -350,6 +352,7 @@ class Engine:
         self.state = STOPPED
         self.publish_status()
         self._status.close()
+        self.gc_pauses.close()
 
 
 def _scene_independent(spec: BridgeSpec) -> bool:

@@ -16,8 +16,10 @@ The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns 
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
+import time
 
 import rospy
 import rospy.topics
@@ -57,3 +59,29 @@ def tune_process(switch_interval_s: float = SWITCH_INTERVAL_S) -> None:
     limit_blas_threads(1)
     sys.setswitchinterval(min(sys.getswitchinterval(), switch_interval_s))
     rospy.topics.QueuedConnection = PromptQueuedConnection
+
+
+class GcPauses:
+    """The longest garbage collection of this process per window: a collection stops every thread."""
+
+    def __init__(self) -> None:
+        self._started = 0.0
+        self.longest = 0.0
+        self.collections = 0
+        gc.callbacks.append(self._on_gc)
+
+    def _on_gc(self, phase: str, _info: dict) -> None:
+        if phase == "start":
+            self._started = time.perf_counter()
+        else:
+            self.collections += 1
+            self.longest = max(self.longest, time.perf_counter() - self._started)
+
+    def take_peak_ms(self) -> float:
+        """The longest pause since the previous call, in milliseconds."""
+        longest, self.longest = self.longest, 0.0
+        return round(longest * 1000, 1)
+
+    def close(self) -> None:
+        if self._on_gc in gc.callbacks:
+            gc.callbacks.remove(self._on_gc)

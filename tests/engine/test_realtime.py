@@ -95,9 +95,10 @@ def test_a_writer_error_surfaces_on_the_next_publish() -> None:
 
 PROBE = (
     "import sys, rospy.topics;"
+    "from airsim_mapper.blas import blas_threads;"
     "from airsim_mapper.engine.realtime import tune_process;"
     "tune_process();"
-    "print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__)"
+    "print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__, *blas_threads())"
 )
 
 
@@ -105,6 +106,28 @@ def test_tune_process_installs_both_settings_and_can_be_turned_off() -> None:
     run = {"capture_output": True, "text": True, "check": True}
     out = subprocess.run([sys.executable, "-c", PROBE], **run).stdout.split()
     assert float(out[0]) == pytest.approx(SWITCH_INTERVAL_S) and out[1] == "PromptQueuedConnection"
+    assert out[2:] == ["1"]  # numpy's OpenBLAS, limited to one thread
     env = {**os.environ, "AIRSIM_MAPPER_NO_TUNING": "1"}
     out = subprocess.run([sys.executable, "-c", PROBE], env=env, **run).stdout.split()
     assert float(out[0]) == pytest.approx(0.005) and out[1] == "QueuedConnection"
+    assert len(out[2:]) == 1
+
+
+def test_gc_pauses_reports_the_longest_collection_once() -> None:
+    import gc
+
+    from airsim_mapper.engine.realtime import GcPauses
+
+    pauses = GcPauses()
+    try:
+        garbage = [[] for _ in range(200_000)]
+        for item in garbage:
+            item.append(item)  # cycles, so the collection has work to do
+        del garbage
+        gc.collect()
+        assert pauses.collections >= 1
+        assert pauses.take_peak_ms() > 0.0
+        assert pauses.take_peak_ms() == 0.0
+    finally:
+        pauses.close()
+    assert pauses._on_gc not in gc.callbacks

@@ -1,0 +1,54 @@
+"""`make soak`'s program, shortened: the whole rig runs, every stream is received, and the report is complete.
+
+The pose-gap verdict belongs to `make soak` on a quiet machine; under the test suite's own load this test
+checks the machinery and the criteria that load cannot break (connection, threads, RSS, rates).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+from harness import ROOT
+
+from airsim_mapper.soak import read_probe, since
+
+
+def test_a_short_soak_runs_the_rig_and_reports_everything(tmp_path):
+    env = {**os.environ, "SOAK_SECONDS": "35", "TMPDIR": str(tmp_path)}
+    run = subprocess.run(
+        [sys.executable, "-m", "airsim_mapper.soak"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    out = run.stdout
+    assert run.returncode in (0, 1), out[-3000:] + run.stderr[-3000:]
+    summary = json.loads(out.split("summary: ", 1)[1].splitlines()[0])
+    assert summary["state"] == "connected" and summary["sim_losses"] == 0
+    assert summary["threads_max"] - summary["threads_min"] <= 2
+    assert summary["rss_growth_mb"] < 20
+    assert 0 < summary["p99_pose_gap_ms"] < 1000 and 0 < summary["monitor_largest_pose_gap_ms"] < 10_000
+    failures = [line for line in out.splitlines() if line.startswith("FAIL: ")]
+    assert all("actual_pose gap" in line for line in failures), failures
+    rates = json.loads(out.split("rates: ", 1)[1].splitlines()[0])
+    assert rates["/airsim_node/Drone1/actual_pose"] > 50
+    assert rates["/airsim_node/Drone1/lidar1/lidar"] > 2
+    assert rates["/airsim_node/Drone1/DownCamera/depth_camera/image"] > 2
+    assert "the pose probe (a process receiving actual_pose only):" in out
+    assert "bridge stream peaks after warm-up" in out
+    leftovers = subprocess.run(["pgrep", "-f", "airsim_mapper.soak --pose-probe"], capture_output=True)
+    assert leftovers.returncode == 1
+
+
+def test_probe_lines_are_read_back_and_cut_at_the_warm_up(tmp_path):
+    path = tmp_path / "probe.txt"
+    path.write_text("1.0 10.0\n2.0 10.01\n3.0 10.02\n")
+    times, stamps = read_probe(path)
+    assert times == [1.0, 2.0, 3.0] and stamps == [10.0, 10.01, 10.02]
+    assert since(2.0, times, stamps) == ([2.0, 3.0], [10.01, 10.02])
+    assert read_probe(tmp_path / "missing.txt") == ([], [])
