@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.procgroup import stop_group
+
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "rviz" / "airsim_mapper.rviz"
 LAUNCH = ROOT / "launch" / "rviz.launch"
@@ -176,17 +178,7 @@ class Child:
     def stop(self, grace_s: float = 30.0) -> None:
         """SIGINT (roslaunch then stops its nodes), wait, then SIGKILL whatever is left of the tree."""
         tree = _children_of({self.popen.pid})
-        if self.alive():
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(self.popen.pid, signal.SIGINT)
-            try:
-                self.popen.wait(timeout=grace_s)
-            except subprocess.TimeoutExpired:
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(self.popen.pid, signal.SIGKILL)
-                self.popen.wait(timeout=10)
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(self.popen.pid, signal.SIGKILL)
+        stop_group(self.popen, grace_s)
         for pid in tree | _children_of(tree):
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.kill(pid, signal.SIGKILL)

@@ -26,6 +26,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from airsim_mapper.procgroup import stop_group
+
 ROOT = Path(__file__).resolve().parent.parent
 NODE = "soak_hello"
 POSE_TOPIC = "/airsim_node/Drone1/actual_pose"
@@ -108,13 +110,7 @@ class Rig:
 
     def stop_all(self) -> None:
         for proc in reversed(self.procs):
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-                try:
-                    proc.wait(timeout=15)
-                except subprocess.TimeoutExpired:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                    proc.wait(timeout=5)
+            stop_group(proc, 15.0)
 
 
 class Listener:
