@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from airsim_mapper.localproc import free_port
+
 ROOT = Path(__file__).resolve().parent.parent
 OUT = Path(os.environ.get("DEMO_OUT", ROOT / "out"))
 BAG_SECONDS = 3
@@ -30,12 +32,6 @@ ROBOT, CAMERA, LIDAR = "Drone1", "DownCamera", "lidar1"
 
 class DemoError(RuntimeError):
     """The demo could not run (the message says which part failed)."""
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 @dataclass

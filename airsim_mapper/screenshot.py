@@ -18,7 +18,6 @@ import os
 import select
 import shutil
 import signal
-import socket
 import struct
 import subprocess
 import sys
@@ -33,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.procgroup import stop_group
+from airsim_mapper.localproc import free_port, stop_group
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "rviz" / "airsim_mapper.rviz"
@@ -140,12 +139,6 @@ def config_frames(path: Path = CONFIG) -> set[str]:
 
 
 # -- processes --------------------------------------------------------------------------------------------
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def _children_of(pids: set[int]) -> set[int]:

@@ -26,7 +26,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from airsim_mapper.procgroup import stop_group
+from airsim_mapper.localproc import free_port, stop_group
 
 ROOT = Path(__file__).resolve().parent.parent
 NODE = "soak_hello"
@@ -55,12 +55,6 @@ class Verdict:
     def check(self, ok: bool, message: str) -> None:
         if not ok:
             self.failures.append(message)
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def sample(pid: int, t0: float) -> Sample:

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from airsim_mapper.procgroup import stop_group
+from airsim_mapper.localproc import free_port, stop_group
 
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 PAGE_BYTES = os.sysconf("SC_PAGE_SIZE")
@@ -20,12 +20,6 @@ PAGE_BYTES = os.sysconf("SC_PAGE_SIZE")
 
 class BenchError(RuntimeError):
     """The benchmark could not start or finish one of its runs."""
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 def wait_until(predicate: Callable[[], bool], timeout: float, what: str, interval: float = 0.05) -> None:

@@ -1,0 +1,57 @@
+"""Local processes for the demo, the soak, the bench, the screenshot and the tests: ports and stopping.
+
+`free_port` picks from below the kernel's ephemeral range. A port that `bind(0)` hands out comes from that
+range, and between choosing it and the child binding it, any outgoing connection on the machine may take
+it as its local port ("Address in use"; seen once in CI).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import random
+import signal
+import socket
+import subprocess
+from pathlib import Path
+
+FALLBACK_EPHEMERAL_START = 32768
+LOWEST_PORT = 20000
+
+
+def _ephemeral_start() -> int:
+    try:
+        return int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return FALLBACK_EPHEMERAL_START
+
+
+def free_port() -> int:
+    """A TCP port free on the loopback interface now, outside the ephemeral range when possible."""
+    top = _ephemeral_start()
+    for _ in range(200) if top - LOWEST_PORT > 1000 else ():
+        port = random.randrange(LOWEST_PORT, top)
+        with socket.socket() as sock:
+            try:
+                sock.bind(("127.0.0.1", port))
+            except OSError:
+                continue
+            return port
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def stop_group(popen: subprocess.Popen, grace_s: float = 10.0) -> None:
+    """SIGINT to the child's group, wait up to `grace_s`, then SIGKILL whatever of the group is left."""
+    if popen.poll() is None:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(popen.pid, signal.SIGINT)
+        try:
+            popen.wait(timeout=grace_s)
+        except subprocess.TimeoutExpired:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(popen.pid, signal.SIGKILL)
+            popen.wait(timeout=10)
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(popen.pid, signal.SIGKILL)

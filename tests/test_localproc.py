@@ -1,0 +1,35 @@
+"""Local process helpers: ports outside the ephemeral range, and stopping a whole process group."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import time
+
+from airsim_mapper.localproc import _ephemeral_start, free_port, stop_group
+
+
+def test_free_ports_are_bindable_and_below_the_ephemeral_range() -> None:
+    ports = {free_port() for _ in range(20)}
+    assert all(port < _ephemeral_start() for port in ports)
+    for port in ports:
+        with socket.socket() as sock:
+            sock.bind(("127.0.0.1", port))
+
+
+def test_stop_group_ends_a_child_that_ignores_sigint_and_its_own_children() -> None:
+    code = (
+        "import signal, subprocess, sys, time;"
+        "signal.signal(signal.SIGINT, signal.SIG_IGN);"
+        "subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)']);"
+        "print('ready', flush=True); time.sleep(60)"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, start_new_session=True)
+    assert child.stdout.readline().strip() == b"ready"
+    stop_group(child, grace_s=0.5)
+    assert child.poll() is not None
+    deadline = time.monotonic() + 5  # SIGKILL is delivered at once, the exit and reaping follow
+    while subprocess.run(["pgrep", "-g", str(child.pid)], capture_output=True).returncode == 0:
+        assert time.monotonic() < deadline, "a process of the group outlived stop_group"
+        time.sleep(0.05)
