@@ -1,15 +1,9 @@
-"""Process settings that keep message latency low while other threads convert images and clouds.
+"""The bridge's process settings: the shared thread tuning, and rospy publishing without a yield.
 
-First, one BLAS thread (`airsim_mapper.blas`): numpy's idle OpenBLAS workers otherwise spin on
-`sched_yield` and take a core from everything else on a small machine.
-
-Then the GIL. A Python thread that blocks (a socket send, a sleep) gives up the GIL; while a CPU-bound
-thread runs, getting it back takes up to the switch interval, 5 ms by default. A thread that blocks once
-per message, like a receive loop or a publisher, is then held to about 200 messages a second, and a pose
-that fans out to several topics waits a switch interval per topic. Two settings fix this:
-
-- a shorter switch interval (0.5 ms), so a waiting thread gets the GIL back sooner;
-- `PromptQueuedConnection`: rospy's queued connection without its `time.sleep(0)` after every enqueue.
+`airsim_mapper.tuning` gives one BLAS thread and a 0.5 ms GIL switch interval. On top, the bridge uses
+`PromptQueuedConnection`: rospy's queued connection without its `time.sleep(0)` after every enqueue, which
+gave up the GIL once per publish, so a pose that fans out to six topics waited a switch interval per
+topic. `GcPauses` reports the longest garbage collection for the status topic.
 
 The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns them off for comparison.
 """
@@ -17,17 +11,13 @@ The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns 
 from __future__ import annotations
 
 import gc
-import os
-import sys
 import time
 
 import rospy
 import rospy.topics
 from rospy.impl.tcpros_pubsub import QueuedConnection
 
-from airsim_mapper.blas import limit_blas_threads
-
-SWITCH_INTERVAL_S = 0.0005
+from airsim_mapper.tuning import tune_threads
 
 
 class PromptQueuedConnection(QueuedConnection):
@@ -52,13 +42,10 @@ class PromptQueuedConnection(QueuedConnection):
         return True
 
 
-def tune_process(switch_interval_s: float = SWITCH_INTERVAL_S) -> None:
+def tune_process() -> None:
     """Apply the settings to this process (idempotent; the engine calls it, so the node and the wrapper)."""
-    if os.environ.get("AIRSIM_MAPPER_NO_TUNING"):  # A/B comparisons in the soak
-        return
-    limit_blas_threads(1)
-    sys.setswitchinterval(min(sys.getswitchinterval(), switch_interval_s))
-    rospy.topics.QueuedConnection = PromptQueuedConnection
+    if tune_threads():
+        rospy.topics.QueuedConnection = PromptQueuedConnection
 
 
 class GcPauses:

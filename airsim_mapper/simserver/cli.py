@@ -4,20 +4,13 @@ from __future__ import annotations
 
 import argparse
 import logging
-import os
 import signal
 import sys
 import threading
 from collections.abc import Sequence
 
-from airsim_mapper.blas import limit_blas_threads
 from airsim_mapper.simserver.server import ServerOptions, SimServer
-
-# The sensor thread renders in Python and holds the GIL for long stretches; the simulation thread sleeps
-# between ticks and sends every pose and instrument message, and each send gives up the GIL. With the
-# default 5 ms switch interval it got the GIL back only once per interval, so a tick with nine messages
-# could take 45 ms. A sub-millisecond interval keeps ticks, and so poses, on time (measured by `make soak`).
-SWITCH_INTERVAL_S = 0.0005
+from airsim_mapper.tuning import tune_threads
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
@@ -40,9 +33,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = parse_args(argv)
-    if not os.environ.get("AIRSIM_MAPPER_NO_TUNING"):
-        limit_blas_threads(1)  # idle OpenBLAS workers spin on sched_yield (see airsim_mapper/blas.py)
-        sys.setswitchinterval(SWITCH_INTERVAL_S)
+    tune_threads()  # the sensor thread renders while the simulation thread must tick on time
     logging.basicConfig(level=args.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     log = logging.getLogger("airsim_mapper.simserver")
     if args.pose_rate <= 0:

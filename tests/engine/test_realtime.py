@@ -10,7 +10,8 @@ import time
 
 import pytest
 
-from airsim_mapper.engine.realtime import SWITCH_INTERVAL_S, PromptQueuedConnection
+from airsim_mapper.engine.realtime import PromptQueuedConnection
+from airsim_mapper.tuning import SWITCH_INTERVAL_S
 
 
 class FakeTransport:
@@ -95,7 +96,7 @@ def test_a_writer_error_surfaces_on_the_next_publish() -> None:
 
 PROBE = (
     "import sys, rospy.topics;"
-    "from airsim_mapper.blas import blas_threads;"
+    "from airsim_mapper.tuning import blas_threads;"
     "from airsim_mapper.engine.realtime import tune_process;"
     "tune_process();"
     "print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__, *blas_threads())"

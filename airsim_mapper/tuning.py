@@ -1,4 +1,9 @@
-"""One BLAS thread per process: numpy's OpenBLAS otherwise spins its idle workers on `sched_yield`.
+"""Thread settings shared by the bridge and the headless server: one BLAS thread, a short GIL interval.
+
+`tune_threads()` applies both unless `AIRSIM_MAPPER_NO_TUNING` is set (for side-by-side comparisons in
+the soak). The bridge adds a rospy setting on top (`engine/realtime.py`).
+
+One BLAS thread: numpy's OpenBLAS otherwise spins its idle workers on `sched_yield`.
 
 The headless server multiplies ray directions by rotations for every camera, lidar and radar frame. Each
 product large enough to use OpenBLAS's thread pool leaves its workers spinning afterwards; on a two-core
@@ -6,12 +11,21 @@ machine `make soak` measured 17,000 `sched_yield` calls a second and 82 % of a c
 server, which starved the bridge and stretched pose gaps to 200-300 ms. The products here are small
 (N x 3 by 3 x 3): one thread is as fast, and spins nothing. The limit is set at run time in numpy's own
 bundled library, so it works whatever was imported first and leaves other BLAS users alone.
+
+A 0.5 ms switch interval: a thread that blocks (a socket send, a sleep) gives up the GIL, and while a
+CPU-bound thread runs it gets it back only after a switch interval, 5 ms by default. The server's
+simulation thread and the bridge's receive loop block once per message, so they were held to about 200
+messages a second.
 """
 
 from __future__ import annotations
 
 import ctypes
+import os
+import sys
 from pathlib import Path
+
+SWITCH_INTERVAL_S = 0.0005
 
 SETTERS = ("openblas_set_num_threads64_", "openblas_set_num_threads", "scipy_openblas_set_num_threads64_")
 GETTERS = ("openblas_get_num_threads64_", "openblas_get_num_threads", "scipy_openblas_get_num_threads64_")
@@ -51,3 +65,12 @@ def blas_threads() -> list[int]:
     """The thread count of each OpenBLAS in this process (for tests and diagnostics)."""
     counts = (_call_first(library, GETTERS) for library in _openblas_libraries())
     return [count for count in counts if count is not None]
+
+
+def tune_threads(switch_interval_s: float = SWITCH_INTERVAL_S) -> bool:
+    """One BLAS thread and a switch interval of at most `switch_interval_s`; False if tuning is off."""
+    if os.environ.get("AIRSIM_MAPPER_NO_TUNING"):
+        return False
+    limit_blas_threads(1)
+    sys.setswitchinterval(min(sys.getswitchinterval(), switch_interval_s))
+    return True
