@@ -1,4 +1,4 @@
-"""Local processes for the demo, the soak, the bench, the screenshot and the tests: ports and stopping.
+"""Local processes for the demo, the soak, the bench, the screenshot and the tests: ports, starting, stopping.
 
 `free_port` picks from below the kernel's ephemeral range. A port that `bind(0)` hands out comes from that
 range, and between choosing it and the child binding it, any outgoing connection on the machine may take
@@ -13,7 +13,9 @@ import random
 import signal
 import socket
 import subprocess
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 FALLBACK_EPHEMERAL_START = 32768
 LOWEST_PORT = 20000
@@ -40,6 +42,23 @@ def free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         return sock.getsockname()[1]
+
+
+def start_group(
+    argv: Sequence[str], log_path: Path, env: dict[str, str], cwd: Path | str, **kwargs: Any
+) -> subprocess.Popen:
+    """Start `argv` in its own process group (so `stop_group` reaches its children), output to `log_path`."""
+    with open(log_path, "wb") as log:
+        return subprocess.Popen(
+            list(argv),
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            env=env,
+            cwd=str(cwd),
+            start_new_session=True,
+            **kwargs,
+        )
 
 
 def stop_group(popen: subprocess.Popen, grace_s: float = 10.0) -> None:

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.localproc import free_port, stop_group
+from airsim_mapper.localproc import free_port, start_group, stop_group
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "rviz" / "airsim_mapper.rviz"
@@ -208,18 +208,7 @@ class RvizStack:
 
     def spawn(self, name: str, argv: Sequence[str], **kwargs: Any) -> Child:
         log = self.workdir / f"{name}.log"
-        with open(log, "wb") as out:
-            popen = subprocess.Popen(
-                list(argv),
-                stdout=out,
-                stderr=subprocess.STDOUT,
-                stdin=subprocess.DEVNULL,
-                env=self.env,
-                cwd=self.workdir,
-                start_new_session=True,
-                **kwargs,
-            )
-        child = Child(name, popen, log)
+        child = Child(name, start_group(argv, log, self.env, self.workdir, **kwargs), log)
         self.children.append(child)
         return child
 

@@ -26,7 +26,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from airsim_mapper.localproc import free_port, stop_group
+from airsim_mapper.localproc import free_port, start_group, stop_group
 
 ROOT = Path(__file__).resolve().parent.parent
 NODE = "soak_hello"
@@ -95,10 +95,7 @@ class Rig:
         self.topics_port, self.services_port = free_port(), free_port()
 
     def start(self, name: str, argv: list[str]) -> subprocess.Popen:
-        with open(self.workdir / f"{name}.log", "wb") as log:
-            proc = subprocess.Popen(
-                argv, stdout=log, stderr=subprocess.STDOUT, env=self.env, cwd=ROOT, start_new_session=True
-            )
+        proc = start_group(argv, self.workdir / f"{name}.log", self.env, ROOT)
         self.procs.append(proc)
         return proc
 

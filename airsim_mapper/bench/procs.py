@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from airsim_mapper.localproc import free_port, stop_group
+from airsim_mapper.localproc import free_port, start_group, stop_group
 
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 PAGE_BYTES = os.sysconf("SC_PAGE_SIZE")
@@ -89,17 +89,7 @@ class Processes:
 
     def start(self, name: str, argv: Sequence[str]) -> Child:
         log_path = self.workdir / f"{name}.{len(self.children)}.log"
-        with open(log_path, "wb") as log:
-            popen = subprocess.Popen(
-                list(argv),
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                stdin=subprocess.DEVNULL,
-                env=self.env,
-                cwd=str(Path.cwd()),
-                start_new_session=True,
-            )
-        child = Child(name, popen, log_path)
+        child = Child(name, start_group(argv, log_path, self.env, Path.cwd()), log_path)
         self.children.append(child)
         return child
 
