@@ -197,18 +197,16 @@ def explain_gaps(times: list[float], stamps: list[float], worst: int = 5) -> Non
     )
 
 
-def gap_percentile(times: list[float], since: float, q: float) -> float:
+def gap_percentile(times: list[float], q: float) -> float:
     import numpy as np
 
-    after = np.asarray([t for t in times if t >= since])
-    return float(np.percentile(np.diff(after), q)) if after.size > 1 else float("inf")
+    return float(np.percentile(np.diff(times), q)) if len(times) > 1 else float("inf")
 
 
-def largest_gap(times: list[float], since: float) -> float:
+def largest_gap(times: list[float]) -> float:
     import numpy as np
 
-    after = np.asarray([t for t in times if t >= since])
-    return float(np.diff(after).max()) if after.size > 1 else float("inf")
+    return float(np.diff(times).max()) if len(times) > 1 else float("inf")
 
 
 def run(seconds: float, workdir: Path) -> int:
@@ -260,7 +258,6 @@ def run(seconds: float, workdir: Path) -> int:
         t0 = time.monotonic()
         samples: list[Sample] = []
         counts_at_warmup: dict[str, int] = {}
-        stamps_from = 0
         while time.monotonic() - t0 < seconds:
             if hello.poll() is not None:
                 raise SoakError(f"hello_ros exited with {hello.returncode}; see {workdir}/hello_ros.log")
@@ -268,27 +265,26 @@ def run(seconds: float, workdir: Path) -> int:
             samples.append(s)
             if not counts_at_warmup and s.t >= warmup:
                 counts_at_warmup = listener.snapshot()[0]
-                stamps_from = len(listener.snapshot()[2])
                 listener.collect_peaks = True
                 own_gc.take_peak_ms()
             print(f"  t={s.t:6.0f} s  rss={s.rss_mb:7.1f} MB  threads={s.threads}", flush=True)
             time.sleep(SAMPLE_PERIOD_S)
         counts, pose_times, pose_stamps = listener.snapshot()
-        os.killpg(probe.pid, signal.SIGINT)
-        probe.wait(timeout=30)
+        pose_times, pose_stamps = since(t0 + warmup, pose_times, pose_stamps)
+        stop_group(probe, 30.0)  # on SIGINT the probe writes its file
         probe_times, probe_stamps = since(t0 + warmup, *read_probe(probe_file))
         print("the pose probe (a process receiving actual_pose only):")
         explain_gaps(probe_times, probe_stamps)
         print("the monitor (its process also receives every other stream):")
-        explain_gaps(pose_times[stamps_from:], pose_stamps[stamps_from:])
+        explain_gaps(pose_times, pose_stamps)
         print(f"longest garbage collection after warm-up: bridge {listener.gc_max_ms:.1f} ms, ", end="")
         print(f"this monitor {own_gc.take_peak_ms():.1f} ms (a pause here delays what it measures)")
         print("bridge stream peaks after warm-up (ms): arrival gap / wait for worker / handling")
         for topic, peaks in sorted(listener.peaks.items()):
             cells = [peaks.get(k, 0.0) for k in ("arrival_gap_max_ms", "wait_max_ms", "handle_max_ms")]
             print(f"  {cells[0]:7.1f} / {cells[1]:7.1f} / {cells[2]:7.1f}  {topic}")
-        poses = (probe_times, pose_times[stamps_from:])
-        return report(samples, warmup, t0, counts, counts_at_warmup, *poses, listener.status, seconds)
+        poses = (probe_times, pose_times)
+        return report(samples, warmup, counts, counts_at_warmup, *poses, listener.status, seconds)
     finally:
         rig.stop_all()
         if "rospy" in sys.modules:
@@ -298,10 +294,9 @@ def run(seconds: float, workdir: Path) -> int:
 def report(
     samples: list[Sample],
     warmup: float,
-    t0: float,
     counts: dict[str, int],
     counts_at_warmup: dict[str, int],
-    pose_times: list[float],
+    probe_times: list[float],
     monitor_pose_times: list[float],
     status: dict,
     seconds: float,
@@ -318,11 +313,11 @@ def report(
     print("bridge streams (received / dropped):")
     for topic, s in sorted(streams.items()):
         print(f"  {s['received']:8d} / {s['dropped']:6d}  {topic}")
-    gap = largest_gap(pose_times, t0 + warmup)
+    gap = largest_gap(probe_times)
     summary = {
         "largest_pose_gap_ms": round(gap * 1000, 1),
-        "p99_pose_gap_ms": round(gap_percentile(pose_times, t0 + warmup, 99) * 1000, 1),
-        "monitor_largest_pose_gap_ms": round(largest_gap(monitor_pose_times, t0 + warmup) * 1000, 1),
+        "p99_pose_gap_ms": round(gap_percentile(probe_times, 99) * 1000, 1),
+        "monitor_largest_pose_gap_ms": round(largest_gap(monitor_pose_times) * 1000, 1),
         "state": status.get("state"),
         "sim_losses": status.get("sim_losses"),
     }
