@@ -1,4 +1,5 @@
-"""Local processes for the demo, the soak, the bench, the screenshot and the tests: ports, starting, stopping.
+"""Local processes for the demo, the soak, the bench, the screenshot and the tests: ports, starting, waiting,
+stopping.
 
 `free_port` picks from below the kernel's ephemeral range. A port that `bind(0)` hands out comes from that
 range, and between choosing it and the child binding it, any outgoing connection on the machine may take
@@ -13,7 +14,8 @@ import random
 import signal
 import socket
 import subprocess
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +44,22 @@ def free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         return sock.getsockname()[1]
+
+
+def wait_until(
+    predicate: Callable[[], bool],
+    timeout: float,
+    what: str,
+    interval: float = 0.05,
+    error: type[Exception] = TimeoutError,
+) -> None:
+    """Poll `predicate` until it is true; raise `error` ("timed out after N s waiting for <what>") if not."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(interval)
+    raise error(f"timed out after {timeout:.0f} s waiting for {what}")
 
 
 def start_group(

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.localproc import free_port, start_group, stop_group
+from airsim_mapper.localproc import free_port, start_group, stop_group, wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "rviz" / "airsim_mapper.rviz"
@@ -351,14 +351,14 @@ def tail(path: Path, lines: int = 25) -> str:
 
 
 def wait_for(predicate: Any, timeout: float, what: str, child: Child | None = None) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    """`wait_until`, failing at once if `child` exits meanwhile."""
+
+    def ready() -> bool:
         if child is not None and not child.alive():
             raise ScreenshotError(f"{child.name} exited early; see {child.log}:\n{tail(child.log)}")
-        if predicate():
-            return
-        time.sleep(0.25)
-    raise ScreenshotError(f"timed out after {timeout:.0f} s waiting for {what}")
+        return predicate()
+
+    wait_until(ready, timeout, what, 0.25, ScreenshotError)
 
 
 # -- watching the data ------------------------------------------------------------------------------------

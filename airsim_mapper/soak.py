@@ -23,10 +23,11 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from airsim_mapper.localproc import free_port, start_group, stop_group
+from airsim_mapper.localproc import free_port, start_group, stop_group, wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
 NODE = "soak_hello"
@@ -65,13 +66,8 @@ def sample(pid: int, t0: float) -> Sample:
     return Sample(time.monotonic() - t0, rss_kb / 1024.0, len(os.listdir(f"/proc/{pid}/task")))
 
 
-def wait_for(predicate, timeout: float, what: str) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.1)
-    raise SoakError(f"timed out after {timeout:.0f} s waiting for {what}")
+def wait_for(predicate: Callable[[], bool], timeout: float, what: str) -> None:
+    wait_until(predicate, timeout, what, 0.1, SoakError)
 
 
 class Rig:

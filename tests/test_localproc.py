@@ -33,3 +33,18 @@ def test_stop_group_ends_a_child_that_ignores_sigint_and_its_own_children() -> N
     while subprocess.run(["pgrep", "-g", str(child.pid)], capture_output=True).returncode == 0:
         assert time.monotonic() < deadline, "a process of the group outlived stop_group"
         time.sleep(0.05)
+
+
+def test_wait_until_returns_when_true_and_raises_the_callers_error_otherwise() -> None:
+    import pytest
+
+    from airsim_mapper.localproc import wait_until
+
+    calls = iter([False, False, True])
+    wait_until(lambda: next(calls), 5, "the third call", interval=0.001)
+
+    class RigError(RuntimeError):
+        pass
+
+    with pytest.raises(RigError, match="timed out after 0 s waiting for nothing"):
+        wait_until(lambda: False, 0.05, "nothing", interval=0.01, error=RigError)

@@ -12,6 +12,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from airsim_mapper import localproc
 from airsim_mapper.localproc import free_port, start_group, stop_group
 
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
@@ -23,12 +24,7 @@ class BenchError(RuntimeError):
 
 
 def wait_until(predicate: Callable[[], bool], timeout: float, what: str, interval: float = 0.05) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(interval)
-    raise BenchError(f"timed out after {timeout:.0f} s waiting for {what}")
+    localproc.wait_until(predicate, timeout, what, interval, BenchError)
 
 
 @dataclass(frozen=True)
