@@ -12,11 +12,11 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from airsim_mapper import localproc
 from airsim_mapper.localproc import free_port
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -30,13 +30,8 @@ class HarnessError(RuntimeError):
 
 
 def wait_until(predicate, timeout: float, interval: float = 0.05, what: str = "condition") -> None:
-    """Poll `predicate` until it returns true, or raise after `timeout` seconds."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(interval)
-    raise HarnessError(f"timed out after {timeout:.1f} s waiting for {what}")
+    """Poll `predicate` until it returns true, or raise HarnessError after `timeout` seconds."""
+    localproc.wait_until(predicate, timeout, what, interval, HarnessError)
 
 
 @dataclass
