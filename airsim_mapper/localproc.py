@@ -79,8 +79,34 @@ def start_group(
         )
 
 
+def descendants(pids: set[int]) -> set[int]:
+    """Every live descendant of `pids`, read from /proc (roslaunch puts its nodes in their own sessions)."""
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            with contextlib.suppress(OSError, ValueError, IndexError):
+                stat = (entry / "stat").read_text()
+                parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    found: set[int] = set()
+    frontier = set(pids)
+    while frontier:
+        frontier = {pid for pid, ppid in parents.items() if ppid in frontier and pid not in found}
+        found |= frontier
+    return found
+
+
+def kill_tree(tree: set[int]) -> None:
+    """SIGKILL the processes of `tree` and any descendants they have now."""
+    for pid in tree | descendants(tree):
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signal.SIGKILL)
+
+
 def stop_group(popen: subprocess.Popen, grace_s: float = 10.0) -> None:
-    """SIGINT to the child's group, wait up to `grace_s`, then SIGKILL whatever of the group is left."""
+    """SIGINT to the child's group, wait up to `grace_s`, then SIGKILL whatever of the group is left,
+    and every descendant that had moved to a group of its own (a roslaunch node whose roslaunch did not
+    stop it in time would otherwise outlive it)."""
+    tree = descendants({popen.pid})
     if popen.poll() is None:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(popen.pid, signal.SIGINT)
@@ -92,3 +118,4 @@ def stop_group(popen: subprocess.Popen, grace_s: float = 10.0) -> None:
             popen.wait(timeout=10)
     with contextlib.suppress(ProcessLookupError, PermissionError):
         os.killpg(popen.pid, signal.SIGKILL)
+    kill_tree(tree)

@@ -17,7 +17,6 @@ import math
 import os
 import select
 import shutil
-import signal
 import struct
 import subprocess
 import sys
@@ -32,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.localproc import free_port, start_group, stop_group, wait_until
+from airsim_mapper.localproc import descendants, free_port, start_group, stop_group, wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIG = ROOT / "rviz" / "airsim_mapper.rviz"
@@ -141,22 +140,6 @@ def config_frames(path: Path = CONFIG) -> set[str]:
 # -- processes --------------------------------------------------------------------------------------------
 
 
-def _children_of(pids: set[int]) -> set[int]:
-    """Every live descendant of `pids` (read from /proc; roslaunch puts its nodes in their own sessions)."""
-    parents: dict[int, int] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            with contextlib.suppress(OSError, ValueError, IndexError):
-                stat = (entry / "stat").read_text()
-                parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
-    found: set[int] = set()
-    frontier = set(pids)
-    while frontier:
-        frontier = {pid for pid, ppid in parents.items() if ppid in frontier and pid not in found}
-        found |= frontier
-    return found
-
-
 @dataclass
 class Child:
     """A process in its own session, its output in a log file."""
@@ -170,11 +153,7 @@ class Child:
 
     def stop(self, grace_s: float = 30.0) -> None:
         """SIGINT (roslaunch then stops its nodes), wait, then SIGKILL whatever is left of the tree."""
-        tree = _children_of({self.popen.pid})
         stop_group(self.popen, grace_s)
-        for pid in tree | _children_of(tree):
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.kill(pid, signal.SIGKILL)
 
 
 @dataclass
@@ -321,7 +300,7 @@ class RvizStack:
     def rviz_alive(self) -> bool:
         """The RViz process is running (pgrep on this stack's display would also find other sessions)."""
         launch = next(c for c in self.children if c.name == "roslaunch")
-        for pid in _children_of({launch.popen.pid}):
+        for pid in descendants({launch.popen.pid}):
             with contextlib.suppress(OSError):
                 if Path(f"/proc/{pid}/comm").read_text().strip() == "rviz":
                     return True

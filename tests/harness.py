@@ -55,7 +55,9 @@ class Process:
         return self.popen.wait(timeout=timeout)
 
     def stop(self, sig: int = signal.SIGINT, timeout: float = 10.0) -> int:
-        """Signal the whole process group, wait, and escalate to SIGKILL if needed."""
+        """Signal the whole process group, wait, and escalate to SIGKILL if needed; descendants in groups
+        of their own (roslaunch's nodes) are killed too."""
+        tree = localproc.descendants({self.popen.pid})
         if self.popen.poll() is None:
             _signal_group(self.popen.pid, sig)
             try:
@@ -70,6 +72,7 @@ class Process:
                     self.popen.wait(timeout=5)
         # Children that outlived the leader still belong to the group.
         _signal_group(self.popen.pid, signal.SIGKILL)
+        localproc.kill_tree(tree)
         return self.popen.returncode
 
 

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 from airsim_mapper.localproc import _ephemeral_start, free_port, stop_group
 
@@ -48,3 +50,28 @@ def test_wait_until_returns_when_true_and_raises_the_callers_error_otherwise() -
 
     with pytest.raises(RigError, match="timed out after 0 s waiting for nothing"):
         wait_until(lambda: False, 0.05, "nothing", interval=0.01, error=RigError)
+
+
+def test_stop_group_also_ends_a_descendant_in_a_session_of_its_own() -> None:
+    """Like a roslaunch node whose roslaunch was killed before it could stop it."""
+    code = (
+        "import signal, subprocess, sys, time;"
+        "signal.signal(signal.SIGINT, signal.SIG_IGN);"
+        "g = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)'], start_new_session=True);"
+        "print(g.pid, flush=True); time.sleep(60)"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, start_new_session=True)
+    grandchild = int(child.stdout.readline())
+    assert os.getpgid(grandchild) != child.pid
+    stop_group(child, grace_s=0.5)
+    deadline = time.monotonic() + 5
+    while Path(f"/proc/{grandchild}").exists() and "Z" not in _state(grandchild):
+        assert time.monotonic() < deadline, "the grandchild outlived stop_group"
+        time.sleep(0.05)
+
+
+def _state(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "Z"

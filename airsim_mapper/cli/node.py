@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import time
 from collections.abc import Callable
 from functools import partial
 from typing import Any
@@ -88,12 +90,23 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{args.mapping}: {exc.strerror or exc}", file=sys.stderr)
         return 1
 
-    rospy.init_node(node_name, anonymous=args.nodename is None)
+    # rospy runs its shutdown hooks inside its signal handler, on whatever the main thread was doing: a
+    # SIGINT during a service registration ran the engine's shutdown while the registration lock was held,
+    # and the node hung (seen in CI). Here the handler only raises a flag; the hooks run from the loop below.
+    rospy.init_node(node_name, anonymous=args.nodename is None, disable_signals=True)
+    stop: list[int] = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda number, _frame: stop.append(number))
+
+    def stopping() -> bool:
+        return bool(stop) or rospy.is_shutdown()
+
     from airsim_mapper.wrapper import ProjectAirSimWrapper, redirect_client_log
 
     redirect_client_log()
-    client = connect(args.address, args.topicsport, args.servicesport, rospy.is_shutdown)
+    client = connect(args.address, args.topicsport, args.servicesport, stopping)
     if client is None:
+        rospy.signal_shutdown("stopped while waiting for the simulator")
         return 0
     wrapper = ProjectAirSimWrapper(
         client,
@@ -116,7 +129,9 @@ def main(argv: list[str] | None = None) -> int:
         rospy.signal_shutdown("scene not loaded")
         return 1
     log.info("bridges:\n%s", format_table(wrapper.bridges))
-    rospy.spin()
+    while not stopping():
+        time.sleep(0.1)
+    rospy.signal_shutdown(f"signal {stop[0]}" if stop else "shutdown requested")
     return 0
 
 
