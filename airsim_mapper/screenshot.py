@@ -15,6 +15,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import select
 import shutil
 import struct
@@ -483,11 +484,28 @@ def parse_args(argv: Sequence[str] | None) -> Options:
     return Options(args.out, args.report, args.settle, args.away, args.timeout, width, height, args.keep)
 
 
+RETRIED_ENV = "AIRSIM_MAPPER_SCREENSHOT_RETRIED"
+_RVIZ_CRASH = re.compile(r"REQUIRED process \[rviz-\d+\] has died!.*?exit code -\d+", re.S)
+
+
+def rviz_crashed(error: str) -> bool:
+    """roslaunch reports that RViz itself was killed by a signal (a fault in RViz or its OpenGL driver)."""
+    return _RVIZ_CRASH.search(error) is not None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    options = parse_args(argv)
+    args = list(sys.argv[1:] if argv is None else argv)
+    options = parse_args(args)
     try:
         report = take(options)
     except ScreenshotError as exc:
+        if rviz_crashed(str(exc)) and not os.environ.get(RETRIED_ENV):
+            # RViz under Xvfb and Mesa's software renderer occasionally aborts at start-up ("corrupted
+            # size vs. prev_size" in one CI run). Nothing of ours is involved: start again, once, afresh.
+            print("screenshot: RViz crashed at start-up; trying once more from scratch", file=sys.stderr)
+            sys.stderr.flush()
+            os.environ[RETRIED_ENV] = "1"
+            os.execv(sys.executable, [sys.executable, "-m", "airsim_mapper.screenshot", *args])
         print(f"screenshot: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -285,3 +285,20 @@ def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_pa
     for pattern in (f"roscore -p {port}", f"--topicsport {report['sim_ports'][0]}", str(tmp_path / "logs")):
         leftovers = subprocess.run(["pgrep", "-f", "--", pattern], capture_output=True, text=True)
         assert leftovers.returncode == 1, f"{pattern}: {leftovers.stdout}"
+
+
+def test_a_crash_of_rviz_itself_is_told_from_other_early_exits():
+    from airsim_mapper.screenshot import rviz_crashed
+
+    crashed = (
+        "roslaunch exited early; see roslaunch.log:\n"
+        "corrupted size vs. prev_size\n"
+        "================================================================================"
+        "REQUIRED process [rviz-4] has died!\n"
+        "process has died [pid 5282, exit code -6, cmd /usr/lib/rviz/rviz -d airsim_mapper.rviz]\n"
+        "Initiating shutdown!\n"
+    )
+    assert rviz_crashed(crashed)
+    assert not rviz_crashed(crashed.replace("exit code -6", "exit code 1"))  # RViz quit: a real error
+    assert not rviz_crashed(crashed.replace("[rviz-4]", "[headless_sim-1]"))
+    assert not rviz_crashed("roslaunch exited early; see roslaunch.log:\nRLException: cannot launch node")
