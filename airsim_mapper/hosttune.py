@@ -21,6 +21,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from airsim_mapper.localproc import stat_fields
+
 SOFTIRQ_NICE = -10
 
 
@@ -55,9 +57,7 @@ def softirq_threads(proc: Path = Path("/proc")) -> list[KernelThread]:
             stat = (entry / "stat").read_text()
         except OSError:  # the process ended while we looked
             continue
-        fields = stat[
-            stat.rindex(")") + 2 :
-        ].split()  # from field 3 on: nice is 19, rt_priority 40, policy 41
+        fields = stat_fields(stat)  # from field 3 on: nice is field 19, rt_priority 40, policy 41
         nice, rt_priority, policy = int(fields[16]), int(fields[37]), int(fields[38])
         found.append(KernelThread(int(entry.name), name, nice, policy, rt_priority))
     return sorted(found, key=lambda t: t.pid)

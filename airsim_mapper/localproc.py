@@ -79,6 +79,11 @@ def start_group(
         )
 
 
+def stat_fields(stat: str) -> list[str]:
+    """Fields 3 onwards of a /proc/<pid>/stat line (after the command name, which may hold spaces and ')')."""
+    return stat[stat.rindex(")") + 2 :].split()
+
+
 def descendants(pids: set[int]) -> set[int]:
     """Every live descendant of `pids`, read from /proc (roslaunch puts its nodes in their own sessions)."""
     parents: dict[int, int] = {}
@@ -86,7 +91,7 @@ def descendants(pids: set[int]) -> set[int]:
         if entry.name.isdigit():
             with contextlib.suppress(OSError, ValueError, IndexError):
                 stat = (entry / "stat").read_text()
-                parents[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+                parents[int(entry.name)] = int(stat_fields(stat)[1])  # field 4: the parent pid
     found: set[int] = set()
     frontier = set(pids)
     while frontier:

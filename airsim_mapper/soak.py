@@ -31,6 +31,7 @@ from pathlib import Path
 
 from airsim_mapper import hosttune
 from airsim_mapper.localproc import free_port, start_group, stop_group, wait_until
+from airsim_mapper.tuning import SWITCH_INTERVAL_S
 
 ROOT = Path(__file__).resolve().parent.parent
 NODE = "soak_hello"
@@ -208,20 +209,23 @@ def largest_gap(times: list[float]) -> float:
     return float(np.diff(times).max()) if len(times) > 1 else float("inf")
 
 
-def tune_host() -> tuple[list[hosttune.KernelThread], int | None]:
-    """ksoftirqd ahead of the busy threads for the run (SOAK_HOST_TUNING=0: leave the host alone)."""
+def tune_host() -> list[hosttune.KernelThread]:
+    """ksoftirqd ahead of the busy threads for the run (SOAK_HOST_TUNING=0: leave the host alone).
+
+    Returns the threads' previous state, for `hosttune.restore`; empty if the host was left alone.
+    """
     if os.environ.get("SOAK_HOST_TUNING", "1") == "0":
         print("host: left as is (SOAK_HOST_TUNING=0)", flush=True)
-        return [], None
+        return []
     try:
         previous = hosttune.raise_softirq_priority()
     except hosttune.HostTuningError as exc:
         print(f"host: left as is ({exc}); pose gaps include the kernel's network delays", flush=True)
-        return [], None
+        return []
     names = ", ".join(t.name for t in previous)
     was = ", ".join(t.describe() for t in previous)
     print(f"host: {names} at nice {hosttune.SOFTIRQ_NICE} for the run, then back to {was}", flush=True)
-    return previous, hosttune.SOFTIRQ_NICE
+    return previous
 
 
 def host_speed_ms() -> float:
@@ -244,7 +248,7 @@ def run(seconds: float, workdir: Path) -> int:
     rig = Rig(workdir)
     warmup = min(60.0, max(20.0, seconds * 0.2))
     speed_before = host_speed_ms()
-    tuned, softirq_nice = tune_host()
+    tuned = tune_host()
     try:
         rig.start("roscore", ["roscore", "-p", str(rig.master_port)])
         os.environ.update(
@@ -275,7 +279,7 @@ def run(seconds: float, workdir: Path) -> int:
         import rospy
 
         rospy.init_node("soak_listener", anonymous=True, disable_signals=True)
-        sys.setswitchinterval(0.0005)  # the monitor must not add its own GIL waits to the gaps it measures
+        sys.setswitchinterval(SWITCH_INTERVAL_S)  # the monitor must not add GIL waits to the gaps it measures
         from airsim_mapper.engine.realtime import GcPauses
 
         own_gc = GcPauses()
@@ -325,7 +329,8 @@ def run(seconds: float, workdir: Path) -> int:
             sys.modules["rospy"].signal_shutdown("soak done")
     speeds = [speed_before, host_speed_ms()]
     print(f"host speed: a fixed Python loop took {speeds[0]} ms before the run, {speeds[1]} ms after")
-    return report(*measured, {"ksoftirqd_nice": softirq_nice, "host_speed_ms": speeds})
+    host = {"ksoftirqd_nice": hosttune.SOFTIRQ_NICE if tuned else None, "host_speed_ms": speeds}
+    return report(*measured, host)
 
 
 def report(
@@ -402,7 +407,7 @@ def pose_probe(out: Path) -> int:
     from geometry_msgs.msg import PoseStamped
 
     rospy.init_node("soak_pose_probe", anonymous=True, disable_signals=True)
-    sys.setswitchinterval(0.0005)
+    sys.setswitchinterval(SWITCH_INTERVAL_S)
     lines: list[str] = []
 
     def on_pose(msg) -> None:

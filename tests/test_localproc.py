@@ -20,15 +20,21 @@ def test_free_ports_are_bindable_and_below_the_ephemeral_range() -> None:
             sock.bind(("127.0.0.1", port))
 
 
-def test_stop_group_ends_a_child_that_ignores_sigint_and_its_own_children() -> None:
+def stubborn_parent(child_kwargs: str) -> tuple[subprocess.Popen, int]:
+    """A process group leader that ignores SIGINT and has one sleeping child (Popen `child_kwargs`)."""
     code = (
         "import signal, subprocess, sys, time;"
         "signal.signal(signal.SIGINT, signal.SIG_IGN);"
-        "subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)']);"
-        "print('ready', flush=True); time.sleep(60)"
+        f"g = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)']{child_kwargs});"
+        "print(g.pid, flush=True); time.sleep(60)"
     )
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, start_new_session=True)
-    assert child.stdout.readline().strip() == b"ready"
+    parent = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, start_new_session=True)
+    return parent, int(parent.stdout.readline())
+
+
+def test_stop_group_ends_a_child_that_ignores_sigint_and_its_own_children() -> None:
+    child, grandchild = stubborn_parent("")
+    assert grandchild > 0
     stop_group(child, grace_s=0.5)
     assert child.poll() is not None
     deadline = time.monotonic() + 5  # SIGKILL is delivered at once, the exit and reaping follow
@@ -54,14 +60,7 @@ def test_wait_until_returns_when_true_and_raises_the_callers_error_otherwise() -
 
 def test_stop_group_also_ends_a_descendant_in_a_session_of_its_own() -> None:
     """Like a roslaunch node whose roslaunch was killed before it could stop it."""
-    code = (
-        "import signal, subprocess, sys, time;"
-        "signal.signal(signal.SIGINT, signal.SIG_IGN);"
-        "g = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)'], start_new_session=True);"
-        "print(g.pid, flush=True); time.sleep(60)"
-    )
-    child = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, start_new_session=True)
-    grandchild = int(child.stdout.readline())
+    child, grandchild = stubborn_parent(", start_new_session=True")
     assert os.getpgid(grandchild) != child.pid
     stop_group(child, grace_s=0.5)
     deadline = time.monotonic() + 5

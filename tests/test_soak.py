@@ -17,17 +17,17 @@ from harness import ROOT
 from airsim_mapper.hosttune import softirq_threads
 from airsim_mapper.soak import read_probe, since
 
+SOAK = [sys.executable, "-m", "airsim_mapper.soak"]
+
+
+def soak_env(seconds: int, tmp_path) -> dict[str, str]:
+    return {**os.environ, "SOAK_SECONDS": str(seconds), "TMPDIR": str(tmp_path)}
+
 
 def test_a_short_soak_runs_the_rig_and_reports_everything(tmp_path):
     host_before = softirq_threads()
-    env = {**os.environ, "SOAK_SECONDS": "35", "TMPDIR": str(tmp_path)}
     run = subprocess.run(
-        [sys.executable, "-m", "airsim_mapper.soak"],
-        cwd=ROOT,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=300,
+        SOAK, cwd=ROOT, env=soak_env(35, tmp_path), capture_output=True, text=True, timeout=300
     )
     out = run.stdout
     assert run.returncode in (0, 1), out[-3000:] + run.stderr[-3000:]
@@ -64,11 +64,10 @@ def test_probe_lines_are_read_back_and_cut_at_the_warm_up(tmp_path):
 
 def test_sigterm_stops_the_rig_and_puts_the_host_back(tmp_path):
     host_before = softirq_threads()
-    env = {**os.environ, "SOAK_SECONDS": "120", "TMPDIR": str(tmp_path)}
     soak = subprocess.Popen(
-        [sys.executable, "-m", "airsim_mapper.soak"],
+        SOAK,
         cwd=ROOT,
-        env=env,
+        env=soak_env(120, tmp_path),
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
