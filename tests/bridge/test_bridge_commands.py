@@ -182,6 +182,9 @@ def test_load_scene_switches_scenes_and_the_topics_follow(rig: Rig):
     pub.publish(String(data="scene_two_drones.jsonc"))
     wait_topic("/airsim_node/Drone2/actual_pose", rig.node)
     wait_gone(f"{ROBOT}/DownCamera/scene_camera/image")
+    # the new scene's bridges register one after another: a loaded CI machine saw actual_pose first
+    wait_topic("/airsim_node/Drone2/FrontCamera/scene_camera/image", rig.node)
+    wait_topic("/airsim_node/Drone1/FrontCamera/depth_planar_camera/image", rig.node)
     topics = published_topics()
     assert "/airsim_node/Drone2/FrontCamera/scene_camera/image" in topics
     assert "/airsim_node/Drone1/FrontCamera/depth_planar_camera/image" in topics
