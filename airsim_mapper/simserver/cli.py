@@ -9,6 +9,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from airsim_mapper.simserver.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
 from airsim_mapper.tuning import tune_threads
 
@@ -25,6 +26,17 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         "--world", default=None, help="world file (JSON or YAML); default: the built-in world"
     )
     parser.add_argument("--pose-rate", type=float, default=100.0, help="actual_pose publish rate in Hz")
+    parser.add_argument(
+        "--render-nice",
+        type=int,
+        default=RENDER_NICE,
+        help=f"render cameras in a child process this much nicer than the server (default {RENDER_NICE})",
+    )
+    parser.add_argument(
+        "--render-in-process",
+        action="store_true",
+        help="render cameras on the server's sensor thread instead of a child process",
+    )
     parser.add_argument(
         "--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"], help="logging level"
     )
@@ -46,6 +58,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         world_path=args.world,
         pose_rate_hz=args.pose_rate,
         tick_rate_hz=max(200.0, args.pose_rate),
+        render_nice=None if args.render_in_process else args.render_nice,
     )
     try:
         server = SimServer(options)

@@ -36,6 +36,7 @@ from airsim_mapper.simserver.streams import (
     InstrumentStream,
     LidarStream,
     RadarStream,
+    Render,
     RotorStream,
 )
 from airsim_mapper.simserver.topics import TopicHub
@@ -76,7 +77,13 @@ class RobotRuntime:
     """A robot of the running scene."""
 
     def __init__(
-        self, scene: SceneSpec, spec: RobotSpec, world: World, hub: TopicHub, clock: SimClock
+        self,
+        scene: SceneSpec,
+        spec: RobotSpec,
+        world: World,
+        hub: TopicHub,
+        clock: SimClock,
+        render: Render | None = None,
     ) -> None:
         self.scene, self.spec, self.world, self.hub, self.clock = scene, spec, world, hub, clock
         self.prefix = scene.robot_prefix(spec.name)
@@ -93,7 +100,7 @@ class RobotRuntime:
         for sensor in spec.sensors:
             sensor_prefix = scene.sensor_prefix(spec.name, sensor.id)
             if sensor.type == "camera":
-                self.cameras[sensor.id] = CameraStream(sensor, sensor_prefix, self.body, world, hub)
+                self.cameras[sensor.id] = CameraStream(sensor, sensor_prefix, self.body, world, hub, render)
             elif sensor.type == "lidar":
                 self.heavy.append(LidarStream(sensor, sensor_prefix, self.body, world, hub))
             elif sensor.type == "radar":

@@ -52,6 +52,7 @@ class CaptureSetting:
     fov_deg: float
     capture_enabled: bool
     streaming_enabled: bool
+    max_depth_m: float = 100.0  # depth vis: metres that map to white (max-depth-meters)
 
 
 @dataclass(frozen=True)
@@ -191,6 +192,9 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
         fov = _number(item.get("fov-degrees", 90.0), f"{here} 'fov-degrees'")
         if not 0.0 < fov < 180.0:
             raise SceneError(f"{here} 'fov-degrees' must be in (0, 180), got {fov}")
+        max_depth = _number(item.get("max-depth-meters", 100.0), f"{here} 'max-depth-meters'")
+        if max_depth <= 0.0:
+            raise SceneError(f"{here} 'max-depth-meters' must be positive, got {max_depth}")
         captures.append(
             CaptureSetting(
                 image_type,
@@ -199,6 +203,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
                 fov,
                 bool(item.get("capture-enabled", False)),
                 bool(item.get("streaming-enabled", False)),
+                max_depth,
             )
         )
     return tuple(captures)

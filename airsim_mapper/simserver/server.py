@@ -8,7 +8,8 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from airsim_mapper.simserver.scene import SceneError, default_scene, parse_scene
+from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker
+from airsim_mapper.simserver.scene import SceneError, SceneSpec, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
 from airsim_mapper.simserver.session import TRAJECTORY_KEYS, Session, TrajectoryStore
 from airsim_mapper.simserver.topics import TopicHub
@@ -29,6 +30,7 @@ class ServerOptions:
     pose_rate_hz: float = 100.0
     tick_rate_hz: float = 200.0
     workers: int = 32
+    render_nice: int | None = RENDER_NICE  # None renders in the server's own process
 
 
 class SimServer:
@@ -37,6 +39,8 @@ class SimServer:
     def __init__(self, options: ServerOptions) -> None:
         self.options = options
         self.world = load_world(options.world_path)
+        nice = options.render_nice
+        self.render_worker = RenderWorker(self.world, nice) if nice is not None else None
         self.table = MethodTable()
         self.hub = TopicHub(options.address, options.topics_port)
         self.services = ServiceServer(self.table, options.address, options.services_port, options.workers)
@@ -46,7 +50,7 @@ class SimServer:
         self.session: Session | None = None
         self._session_methods: list[str] = []
         self._register_sim_methods()
-        self._activate(Session(default_scene(), self.world, self.hub))
+        self._activate(self._session(default_scene()))
         self._threads = [
             threading.Thread(target=self._sim_loop, name="sim", daemon=True),
             threading.Thread(target=self._sensor_loop, name="sensors", daemon=True),
@@ -69,6 +73,8 @@ class SimServer:
             thread.join(timeout=5.0)
         self.services.stop()
         self.hub.stop()
+        if self.render_worker is not None:
+            self.render_worker.close()
 
     # -- scenes
 
@@ -93,6 +99,10 @@ class SimServer:
             return session.trajectories.import_ned(params)
         return self._default_trajectories.import_ned(params)
 
+    def _session(self, spec: SceneSpec) -> Session:
+        render = self.render_worker.render if self.render_worker is not None else None
+        return Session(spec, self.world, self.hub, render)
+
     def _activate(self, session: Session) -> None:
         """Swap in a new scene: methods, topic table (with `/$topics` cached) and initial publications."""
         old = self.session
@@ -115,7 +125,7 @@ class SimServer:
         except SceneError as exc:
             raise ServiceError(f"Invalid scene config: {exc}") from exc
         with self._scene_lock:
-            self._activate(Session(spec, self.world, self.hub))
+            self._activate(self._session(spec))
         return spec.id
 
     def _unsubscribe(self, params: dict[str, Any]) -> bool:

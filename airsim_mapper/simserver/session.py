@@ -9,6 +9,7 @@ from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.robots import RobotRuntime
 from airsim_mapper.simserver.scene import SceneSpec, topic_table
 from airsim_mapper.simserver.services import Method, ServiceError
+from airsim_mapper.simserver.streams import Render
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo
 from airsim_mapper.simserver.world import World
 
@@ -50,11 +51,11 @@ class TrajectoryStore:
 class Session:
     """Everything that exists while one scene is loaded."""
 
-    def __init__(self, spec: SceneSpec, world: World, hub: TopicHub) -> None:
+    def __init__(self, spec: SceneSpec, world: World, hub: TopicHub, render: Render | None = None) -> None:
         self.spec = spec
         self.hub = hub
         self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start)
-        self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock) for r in spec.robots}
+        self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns

@@ -9,6 +9,7 @@ The sensor modules (camera, lidar, radar, instruments) are pure numpy; this modu
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import threading
@@ -30,6 +31,7 @@ LOG = logging.getLogger("airsim_mapper.simserver.streams")
 
 GET_IMAGES_TIMEOUT_S = 5.0
 IDLE_REFRESH_NS = 1_000_000_000
+Render = Callable[..., dict[int, camera.RenderedImage]]  # camera.render's arguments after the world
 
 
 def mount_pose(
@@ -63,14 +65,27 @@ class Schedule:
 
 
 class CameraStream:
-    """One camera: renders the capture-enabled types that are subscribed or requested by GetImages."""
+    """One camera: renders the capture-enabled types that are subscribed or requested by GetImages.
 
-    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
+    `render` has the signature of `camera.render` without the world (a RenderWorker's, in the server);
+    None renders in this process.
+    """
+
+    def __init__(
+        self,
+        sensor: SensorSpec,
+        prefix: str,
+        body: Body,
+        world: World,
+        hub: TopicHub,
+        render: Render | None = None,
+    ) -> None:
         self.sensor = sensor
         self.prefix = prefix
         self.body = body
         self.world = world
         self.hub = hub
+        self.render: Render = render or functools.partial(camera.render, world)
         self.captures = {c.image_type: c for c in sensor.enabled_captures()}
         self.fov = {t: c.fov_deg for t, c in self.captures.items()}
         self.offset_position = np.array(sensor.position, dtype=float)
@@ -132,7 +147,9 @@ class CameraStream:
             groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
         latest: dict[int, dict[str, Any]] = {}
         for (width, height, fov), types in groups.items():
-            rendered = camera.render(self.world, position, orientation, width, height, fov, types)
+            vis = self.captures[camera.DEPTH_VIS] if camera.DEPTH_VIS in types else None
+            max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
+            rendered = self.render(position, orientation, width, height, fov, types, max_depth)
             for image_type, img in rendered.items():
                 message = messages.image(
                     now_ns, img.encoding, img.width, img.height, img.data, position, orientation

@@ -173,3 +173,35 @@ def test_invalid_render_requests_are_refused(world, size, fov, types, message):
     with pytest.raises(CameraError) as caught:
         render(world, np.zeros(3), LEVEL_NORTH, size[0], size[1], fov, types)
     assert str(caught.value) == message
+
+
+class PublishedImages:
+    """The parts of TopicHub a CameraStream uses: everything is subscribed, images are kept."""
+
+    def __init__(self) -> None:
+        self.messages: dict[str, dict] = {}
+
+    def is_subscribed(self, path: str) -> bool:
+        return True
+
+    def publish(self, path: str, message: dict) -> None:
+        self.messages[path] = message
+
+
+def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(world):
+    from airsim_mapper.simserver.motion import Body
+    from airsim_mapper.simserver.scene import CaptureSetting, SensorSpec
+    from airsim_mapper.simserver.streams import CameraStream
+
+    captures = (
+        CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0),
+        CaptureSetting(2, 64, 48, 90.0, True, False),
+    )
+    sensor = SensorSpec("C", "camera", {}, captures=captures, capture_interval=0.1)
+    body = Body(np.array([0.0, 0.0, -20.0]), quat_from_rpy(0.0, -math.pi / 2, 0.0), lambda p: 0.0)
+    hub = PublishedImages()
+    CameraStream(sensor, "/S/C", body, world, hub).capture(0, [2, 4])
+    vis = np.frombuffer(bytes(hub.messages["/S/C/depth_vis_camera"]["data"]), np.uint8)
+    depth = np.frombuffer(bytes(hub.messages["/S/C/depth_camera"]["data"]), "<f2")
+    assert depth.min() > 5.0  # everything is farther than max-depth-meters, so depth vis is all white
+    assert (vis == 255).all()

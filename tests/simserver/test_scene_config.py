@@ -242,6 +242,20 @@ def set_sensor(scene: dict, sensor: dict) -> None:
         ),
         (
             bad(
+                lambda s: set_sensor(
+                    s,
+                    {
+                        "id": "C",
+                        "type": "camera",
+                        "enabled": True,
+                        "capture-settings": [{"image-type": 4, "max-depth-meters": 0}],
+                    },
+                )
+            ),
+            "image-type 4 'max-depth-meters' must be positive, got 0",
+        ),
+        (
+            bad(
                 lambda s: set_sensor(s, {"id": "C", "type": "camera", "enabled": True, "capture-interval": 0})
             ),
             "'capture-interval' must be positive, got 0",
@@ -260,3 +274,12 @@ def set_sensor(scene: dict, sensor: dict) -> None:
 def test_invalid_scenes_are_rejected_with_a_message_saying_what_is_wrong(text, message):
     with pytest.raises(SceneError, match=message):
         parse_scene(text)
+
+
+def test_max_depth_meters_is_read_per_capture_and_defaults_to_100():
+    scene = minimal()
+    captures = [{"image-type": 4, "max-depth-meters": 25}, {"image-type": 0}]
+    set_sensor(scene, {"id": "C", "type": "camera", "enabled": True, "capture-settings": captures})
+    spec = parse_scene(json.dumps(scene))
+    settings = {c.image_type: c for c in spec.robots[0].sensors[0].captures}
+    assert (settings[4].max_depth_m, settings[0].max_depth_m) == (25.0, 100.0)

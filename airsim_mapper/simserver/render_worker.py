@@ -1,0 +1,199 @@
+"""Camera rendering in a child process that runs at a lower CPU priority than the simulation.
+
+In Project AirSim the GPU renders while the CPU simulates. Here both share the CPU, and a render in the
+server's own process holds its GIL in many short numpy steps while the simulation thread must publish
+poses on time, at the same priority as the ROS nodes downstream. `RenderWorker` renders with
+`camera.render` in a child process at nice +10 (`RENDER_NICE`), so on a busy machine the camera rates drop
+before the pose rate does.
+
+The child is `python -m airsim_mapper.simserver.render_worker FD`: it reads requests from one end of a
+socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first message is
+the World; each request is the arguments of `camera.render` after the world; each answer is the dict of
+RenderedImage, or the CameraError it raised. It starts on the first render, restarts if it has died, and
+exits when the server closes its end (or dies). A child that fails before its first answer (it cannot be
+started, or cannot import) is reported once, and the server then renders in its own process.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+from collections.abc import Sequence
+from multiprocessing.connection import Connection
+from pathlib import Path
+
+import numpy as np
+
+from airsim_mapper.simserver import camera
+from airsim_mapper.simserver.world import World
+
+LOG = logging.getLogger("airsim_mapper.simserver.render_worker")
+
+RENDER_NICE = 10  # added to the server's nice value; 0 keeps the worker at the server's priority
+ANSWER_TIMEOUT_S = 10.0  # a render slower than this counts as a hung worker
+
+
+class RenderWorkerError(RuntimeError):
+    """The render process could not be started or stopped answering."""
+
+
+class RenderWorker:
+    """`render(...)` with the signature of `camera.render` minus the world, answered by a child process."""
+
+    def __init__(self, world: World, nice: int = RENDER_NICE) -> None:
+        self.world = world
+        self.nice = int(nice)
+        self.starts = 0
+        self._lock = threading.Lock()
+        self._proc: subprocess.Popen | None = None
+        self._conn: Connection | None = None
+        self._closed = False
+        self._answered = False  # the current child has answered at least once
+        self._in_process = False  # set for good when a new child fails before its first answer
+
+    @property
+    def restarts(self) -> int:
+        return max(0, self.starts - 1)
+
+    @property
+    def pid(self) -> int | None:
+        return self._proc.pid if self._proc is not None else None
+
+    def render(
+        self,
+        position: np.ndarray,
+        orientation: np.ndarray,
+        width: int,
+        height: int,
+        fov_deg: float,
+        image_types: Sequence[int],
+        max_depth_vis: float = camera.DEFAULT_MAX_DEPTH_VIS,
+    ) -> dict[int, camera.RenderedImage]:
+        request = (
+            np.asarray(position, dtype=float),
+            np.asarray(orientation, dtype=float),
+            width,
+            height,
+            float(fov_deg),
+            list(image_types),
+            float(max_depth_vis),
+        )
+        with self._lock:
+            if self._closed:
+                raise RenderWorkerError("the render worker is closed")
+            if self._in_process:
+                return camera.render(self.world, *request)
+            try:
+                conn = self._connection()
+                conn.send(request)
+                if not conn.poll(ANSWER_TIMEOUT_S):
+                    raise RenderWorkerError(f"no answer within {ANSWER_TIMEOUT_S:g} s")
+                answer = conn.recv()
+            except (OSError, EOFError, RenderWorkerError) as exc:
+                reason = str(exc) or type(exc).__name__
+                answered, self._answered = self._answered, False
+                self._discard()
+                if answered:  # it worked before: the next render starts a new one
+                    raise RenderWorkerError(f"render worker failed ({reason})") from exc
+                LOG.error("the render worker does not start (%s); rendering in the server process", reason)
+                self._in_process = True
+                return camera.render(self.world, *request)
+            self._answered = True
+        if isinstance(answer, Exception):
+            raise answer
+        return answer
+
+    def close(self) -> None:
+        """Stop the child (it exits on end of file) and wait for it."""
+        with self._lock:
+            self._closed = True
+            self._discard()
+
+    # -- the child process
+
+    def _connection(self) -> Connection:
+        if self._conn is not None and self._proc is not None and self._proc.poll() is None:
+            return self._conn
+        if self._proc is not None:
+            code = self._proc.poll()
+            LOG.warning("render worker %d exited (code %s); starting a new one", self._proc.pid, code)
+            self._discard()
+        ours, theirs = socket.socketpair()
+        try:
+            self._proc = subprocess.Popen(
+                _command(theirs.fileno(), self.nice),
+                pass_fds=(theirs.fileno(),),
+                stdin=subprocess.DEVNULL,
+                env=_child_env(),
+            )
+        except OSError as exc:
+            ours.close()
+            raise RenderWorkerError(f"cannot start the render worker: {exc}") from exc
+        finally:
+            theirs.close()
+        self.starts += 1
+        self._conn = Connection(ours.detach())
+        self._conn.send(self.world)
+        return self._conn
+
+    def _discard(self) -> None:
+        """Close our end (the child then exits) and reap the child, killing it if it lingers."""
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+        proc, self._proc = self._proc, None
+        if proc is not None:
+            try:
+                proc.wait(timeout=2.0)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def _command(fd: int, nice: int) -> list[str]:
+    return [sys.executable, "-m", __name__, str(fd), str(nice)]
+
+
+def _child_env() -> dict[str, str]:
+    """This environment with the directory holding this package first on PYTHONPATH (a checkout works)."""
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+def serve(conn: Connection, nice: int) -> None:
+    """The child's loop: the world first, then one answer per request until end of file."""
+    if nice:
+        os.nice(nice)
+    world: World = conn.recv()
+    while True:
+        try:
+            request = conn.recv()
+        except EOFError:
+            return
+        try:
+            answer: object = camera.render(world, *request)
+        except camera.CameraError as exc:
+            answer = exc
+        except Exception as exc:  # a bug in the renderer: the server logs it, the worker stays up
+            answer = RenderWorkerError(f"render failed: {exc!r}")
+        conn.send(answer)
+
+
+def main(argv: Sequence[str]) -> int:
+    from airsim_mapper.tuning import limit_blas_threads
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group; the server stops us
+    limit_blas_threads(1)
+    serve(Connection(int(argv[0])), int(argv[1]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

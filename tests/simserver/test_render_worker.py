@@ -1,0 +1,143 @@
+"""The render worker: the same images as an in-process render, from a nicer child that survives faults."""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from harness import wait_until
+from simharness import start_simserver
+
+from airsim_mapper.simserver import camera, render_worker
+from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
+from airsim_mapper.simserver.world import load_world
+from simserver.clientkit import load_world as load_scene
+
+POSITION = np.array([-8.0, 0.0, -12.0])
+ORIENTATION = np.array([0.9914, 0.0, -0.1305, 0.0])
+
+
+def nice_of(pid: int) -> int:
+    return int(Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[16])
+
+
+def alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()[0]
+    except FileNotFoundError:
+        return False
+    return state != "Z"
+
+
+@pytest.fixture
+def worker():
+    rw = RenderWorker(load_world())
+    yield rw
+    rw.close()
+
+
+def test_the_worker_renders_every_type_byte_for_byte_like_an_in_process_render(worker):
+    types = list(camera.IMAGE_TYPES)
+    got = worker.render(POSITION, ORIENTATION, 160, 120, 90.0, types, 30.0)
+    want = camera.render(load_world(), POSITION, ORIENTATION, 160, 120, 90.0, types, 30.0)
+    assert sorted(got) == types
+    for kind in types:
+        assert got[kind] == want[kind], f"image type {kind} differs"
+
+
+def test_the_worker_starts_on_the_first_render_at_a_lower_priority_and_stops_on_close(worker):
+    assert worker.pid is None
+    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    pid = worker.pid
+    assert nice_of(pid) == min(19, os.nice(0) + RENDER_NICE)
+    worker.close()
+    assert not alive(pid)
+    with pytest.raises(RenderWorkerError, match="closed"):
+        worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+
+
+def test_a_bad_request_raises_its_camera_error_and_the_worker_stays_up(worker):
+    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    pid = worker.pid
+    with pytest.raises(camera.CameraError, match="image size must be positive"):
+        worker.render(POSITION, ORIENTATION, 0, 24, 90.0, [0])
+    with pytest.raises(camera.CameraError, match="unknown image type 9"):
+        worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [9])
+    assert worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [1])[1].encoding == "16FC1"
+    assert worker.pid == pid and worker.restarts == 0
+
+
+def test_a_killed_worker_is_replaced_on_the_next_render_with_a_warning(worker, caplog):
+    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    first = worker.pid
+    os.kill(first, signal.SIGKILL)
+    wait_until(lambda: worker._proc.poll() is not None, 5.0, what="the worker to die")
+    with caplog.at_level(logging.WARNING, logger=render_worker.LOG.name):
+        image = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])[0]
+    assert (image.width, image.height, len(image.data)) == (32, 24, 32 * 24 * 3)
+    assert worker.pid != first and worker.restarts == 1
+    assert f"render worker {first} exited (code -9); starting a new one" in caplog.text
+
+
+def test_a_hung_worker_is_killed_after_the_answer_timeout_and_then_replaced(worker, monkeypatch):
+    monkeypatch.setattr(render_worker, "ANSWER_TIMEOUT_S", 0.5)
+    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    hung = worker.pid
+    os.kill(hung, signal.SIGSTOP)
+    start = time.monotonic()
+    with pytest.raises(RenderWorkerError, match=r"no answer within 0\.5 s"):
+        worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    assert time.monotonic() - start < 5.0
+    assert not alive(hung)
+    assert worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])[0].width == 32
+    assert worker.pid != hung
+
+
+def children(pid: int) -> list[int]:
+    found = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        text = (task / "children").read_text().split()
+        found += [int(c) for c in text]
+    return found
+
+
+@pytest.mark.parametrize("in_process", [False, True])
+def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(launcher, in_process):
+    from projectairsim import Drone
+
+    server = start_simserver(launcher, *(["--render-in-process"] if in_process else []))
+    client = server.client()
+    try:
+        world = load_scene(client, "scene_basic_drone.jsonc")
+        images = Drone(client, world, "Drone1").get_images("DownCamera", [0, 2])
+        assert set(images) == {0, 2}
+        kids = children(server.process.popen.pid)
+        if in_process:
+            assert kids == []
+        else:
+            assert len(kids) == 1
+            assert nice_of(kids[0]) == min(19, nice_of(server.process.popen.pid) + RENDER_NICE)
+            assert b"airsim_mapper.simserver.render_worker" in Path(f"/proc/{kids[0]}/cmdline").read_bytes()
+    finally:
+        client.disconnect()
+    if not in_process:
+        assert server.process.stop(signal.SIGTERM, timeout=10.0) == 0
+        assert not alive(kids[0])
+
+
+def test_a_worker_that_cannot_start_is_reported_once_and_the_server_renders_in_process(
+    worker, monkeypatch, caplog
+):
+    monkeypatch.setattr(render_worker, "_command", lambda fd, nice: ["/bin/false"])
+    with caplog.at_level(logging.ERROR, logger=render_worker.LOG.name):
+        first = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3])
+        second = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3])
+    want = camera.render(load_world(), POSITION, ORIENTATION, 32, 24, 90.0, [0, 3])
+    assert first == want and second == want
+    assert caplog.text.count("the render worker does not start") == 1
+    assert worker.starts == 1 and worker.pid is None
