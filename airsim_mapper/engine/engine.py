@@ -15,6 +15,7 @@ script loads or adopts a scene again.
 
 from __future__ import annotations
 
+import gc
 import logging
 import queue
 import threading
@@ -26,7 +27,7 @@ from typing import Any
 from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
 from airsim_mapper.engine.health import PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
-from airsim_mapper.engine.realtime import GcPauses, tune_process
+from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import TfBroadcaster
 from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
@@ -101,6 +102,7 @@ class Engine:
         specs = self.specs_for(scene)
         with self._lock:
             self._stop_scene_bridges(keep={s.name: s for s in specs})
+            thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
             self.shared.clear()
             streaming: list[StreamingImage] = [
@@ -112,6 +114,7 @@ class Engine:
                 bridge = build(spec, self.services, streaming)
                 bridge.start()
                 self.bridges[spec.name] = bridge
+            log.debug("heap frozen in %.1f ms", freeze_heap())
         return specs
 
     def _stop_scene_bridges(self, keep: dict[str, BridgeSpec]) -> None:
@@ -306,6 +309,7 @@ class Engine:
             **self.counters,
             "bad_frames": self.sim.bad_frames,
             "gc_max_ms": self.gc_pauses.take_peak_ms(),
+            "gc_frozen": gc.get_freeze_count(),  # objects kept out of full collections (freeze_heap)
             "streams": streams,
             "bridge_errors": errors,
         }

@@ -45,7 +45,14 @@ class Kinematic:
     angular_acceleration: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def copy(self) -> Kinematic:
-        return Kinematic(*(np.array(v, dtype=float) for v in vars(self).values()))
+        return Kinematic(
+            self.position.copy(),
+            self.orientation.copy(),
+            self.linear_velocity.copy(),
+            self.angular_velocity.copy(),
+            self.linear_acceleration.copy(),
+            self.angular_acceleration.copy(),
+        )
 
 
 @dataclass

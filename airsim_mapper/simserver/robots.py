@@ -117,10 +117,9 @@ class RobotRuntime:
 
     def ground_z(self, position: np.ndarray) -> float:
         """z of the first surface straight below `position` (the ground plane if the world misses)."""
-        origin = np.asarray(position, dtype=float) - np.array([0.0, 0.0, GROUND_PROBE_M])
-        hits = self.world.raycast(origin, np.array([[0.0, 0.0, 1.0]]), 1000.0)
-        distance = float(hits.distance[0])
-        return float(origin[2]) + distance if math.isfinite(distance) else 0.0
+        x, y, z = (float(v) for v in position)
+        surface = self.world.surface_below((x, y, z - GROUND_PROBE_M), 1000.0)
+        return surface if surface is not None else 0.0
 
     def _blocked(self, old: np.ndarray, new: np.ndarray) -> bool:
         """Veto a move that goes deeper into an object; report the collision on collision_info."""

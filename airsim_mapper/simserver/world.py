@@ -133,6 +133,9 @@ class World:
         self._bound_center = np.array([o.center for o in column_objects], dtype=f32).reshape(-1, 3)
         self._bound_r2 = np.array([o.radius**2 for o in column_objects], dtype=f32) * f32(1.0001)
         self._bound_c2 = (self._bound_center**2).sum(axis=1)
+        self._bound_center64 = np.array([o.center for o in column_objects], dtype=np.float64).reshape(-1, 3)
+        self._bound_radius = np.array([o.radius for o in column_objects], dtype=np.float64)
+        self._box_top = (self._box_center[:, 2] - self._box_half[:, 2]).astype(np.float64)
         self._box_cols = np.ascontiguousarray(self._box_center.T)  # (3, B)
         self._box_half_cols = np.ascontiguousarray(self._box_half.T)
         self._sphere_cols = np.ascontiguousarray(self._sphere_center.T)  # (3, S)
@@ -355,10 +358,43 @@ class World:
                 normal[a, rays] = (point - np.take(self._sphere_cols[a], s, mode="clip")) / radius
         return normal
 
+    def surface_below(self, position: Sequence[float], max_range: float) -> float | None:
+        """z of the first surface a ray cast straight down (+z) from `position` meets within `max_range`.
+
+        The same answer as `raycast` with direction (0, 0, 1), by the same rules (one-sided surfaces, the
+        ground seen from above), without its per-call overhead: motion asks it twice per tick.
+        """
+        x, y, z = (float(v) for v in position)
+        nearest = -z if z < 0.0 else math.inf  # the ground plane
+        if self._box_index.size:
+            rx, ry = x - self._box_cols[0], y - self._box_cols[1]
+            lx = self._box_cos * rx + self._box_sin * ry
+            ly = self._box_cos * ry - self._box_sin * rx
+            over = (np.abs(lx) <= self._box_half_cols[0]) & (np.abs(ly) <= self._box_half_cols[1])
+            t = self._box_top - z
+            t = t[over & (t > _EPS)]
+            if t.size:
+                nearest = min(nearest, float(t.min()))
+        if self._sphere_index.size:
+            cx, cy, cz = self._sphere_cols
+            r2 = self._sphere_radius * self._sphere_radius
+            d2 = (x - cx) ** 2 + (y - cy) ** 2
+            over = d2 <= r2
+            t = cz - np.sqrt(np.where(over, r2 - d2, 0.0)) - z
+            t = t[over & (t > _EPS)]
+            if t.size:
+                nearest = min(nearest, float(t.min()))
+        return z + nearest if nearest <= max_range else None
+
     # ---------------------------------------------------------------- collisions
     def collide_sphere(self, center: np.ndarray, radius: float) -> Contact | None:
         """Deepest overlap of a sphere with a collidable object (the ground is not considered)."""
         c = np.asarray(center, dtype=np.float64).reshape(3)
+        if not self.objects:
+            return None
+        reach = self._bound_radius + radius
+        if (((self._bound_center64 - c) ** 2).sum(axis=1) > reach * reach).all():
+            return None  # far from every object's bounding sphere: the common case, kept cheap
         best: tuple[float, int, np.ndarray, np.ndarray] | None = None
         candidates = []
         if self._box_index.size:

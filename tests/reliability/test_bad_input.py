@@ -53,6 +53,7 @@ def rig(module_launcher: Launcher, module_master: RosMaster, tmp_path_factory) -
     node = start_node(module_launcher, ports, "--scene", SCENE, "--mapping", str(mapping), node_name="guard")
     status = probe(module_launcher, "status", "status", "guard")
     wait_until(lambda: statuses(status) and statuses(status)[-1]["scene"] == SCENE, 30, what="the scene")
+    assert statuses(status)[-1]["gc_frozen"] > 10_000  # the running scene's heap is out of full collections
     view = SimView(ports)
     view.ready()
     view.close()

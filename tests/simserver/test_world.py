@@ -178,6 +178,35 @@ def test_a_shared_origin_gives_the_same_hits_as_repeating_it_per_ray(world):
     assert np.allclose(shared.normal, repeated.normal, atol=1e-5)
 
 
+def test_surface_below_matches_a_straight_down_ray_cast_everywhere():
+    scene = World(
+        [
+            box("Yawed", [3.0, -2.0, -2.0], [4.0, 2.0, 4.0], yaw_deg=30.0),
+            box("Tower", [3.0, -2.0, -8.0], [1.0, 1.0, 2.0]),  # above Yawed: the first surface wins
+            sphere("Ball", [-4.0, 3.0, -3.0], 2.0),
+        ]
+    )
+    rng = np.random.default_rng(11)
+    points = rng.uniform([-8, -6, -12], [8, 6, 1], size=(3000, 3))  # some inside objects, some underground
+    hits = scene.raycast(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), 1000.0)
+    for point, distance in zip(points, hits.distance.astype(float)):
+        got = scene.surface_below(point, 1000.0)
+        if math.isinf(distance):
+            assert got is None, point
+        else:
+            assert got == pytest.approx(point[2] + distance, abs=1e-3), point
+    kinds = set(hits.object_index.tolist())
+    assert {GROUND_INDEX, MISS_INDEX, 0, 1, 2} <= kinds  # every case was met
+    assert scene.surface_below([3.0, -2.0, -20.0], 5.0) is None  # the tower's top is 11 m down
+
+
+def test_collision_checks_far_from_every_object_skip_the_exact_test(world, monkeypatch):
+    calls = []
+    monkeypatch.setattr(World, "_box_contacts", lambda *a: calls.append(a))
+    assert world.collide_sphere(np.array([-50.0, -50.0, -10.0]), 0.5) is None
+    assert calls == []
+
+
 def test_raycast_rejects_a_mismatched_number_of_origins(world):
     with pytest.raises(ValueError, match="raycast: 2 origins for 3 directions"):
         world.raycast(np.zeros((2, 3)), np.ones((3, 3)), 10.0)
