@@ -6,12 +6,16 @@ poses on time, at the same priority as the ROS nodes downstream. `RenderWorker` 
 `camera.render` in a child process at nice +10 (`RENDER_NICE`), so on a busy machine the camera rates drop
 before the pose rate does.
 
-The child is `python -m airsim_mapper.simserver.render_worker FD`: it reads requests from one end of a
-socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first message is
-the World; each request is the arguments of `camera.render` after the world; each answer is the dict of
-RenderedImage, or the CameraError it raised. It starts on the first render, restarts if it has died, and
-exits when the server closes its end (or dies). A child that fails before its first answer (it cannot be
-started, or cannot import) is reported once, and the server then renders in its own process.
+The child is `python -m airsim_mapper.simserver.render_worker FD NICE`: it reads requests from one end of
+a socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first message
+is the World; each request is the arguments of `camera.render` after the world; each answer is the dict
+of RenderedImage, or the CameraError it raised.
+
+It starts on the first render, is replaced if it dies or hangs, and exits when the server closes its end
+or dies. It ignores SIGINT and SIGTERM, which a terminal or a supervisor sends to the whole process
+group, so a stopping server never loses its renderer first. A child that fails before its first answer
+(it cannot be started, or cannot import) is reported once, and the server then renders in its own
+process.
 """
 
 from __future__ import annotations
@@ -189,7 +193,9 @@ def serve(conn: Connection, nice: int) -> None:
 def main(argv: Sequence[str]) -> int:
     from airsim_mapper.tuning import limit_blas_threads
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group; the server stops us
+    # Ctrl-C and a group's SIGTERM reach us too: the server finishes its render and then closes our end
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
     limit_blas_threads(1)
     serve(Connection(int(argv[0])), int(argv[1]))
     return 0

@@ -8,7 +8,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker
+from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
 from airsim_mapper.simserver.scene import SceneError, SceneSpec, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
 from airsim_mapper.simserver.session import TRAJECTORY_KEYS, Session, TrajectoryStore
@@ -172,6 +172,9 @@ class SimServer:
             try:
                 if session is not None:
                     worked = session.sensor_tick()
+            except RenderWorkerError as exc:  # the worker is replaced on the next capture
+                LOG.warning("sensor step failed: %s", exc)
+                self._stopping.wait(0.1)
             except Exception:
                 LOG.exception("sensor step failed")
                 self._stopping.wait(0.1)

@@ -125,9 +125,10 @@ def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(la
             assert b"airsim_mapper.simserver.render_worker" in Path(f"/proc/{kids[0]}/cmdline").read_bytes()
     finally:
         client.disconnect()
-    if not in_process:
+    if not in_process:  # SIGTERM to the whole group: the server stops first, then its renderer
         assert server.process.stop(signal.SIGTERM, timeout=10.0) == 0
         assert not alive(kids[0])
+        assert "sensor step failed" not in server.process.output()
 
 
 def test_a_worker_that_cannot_start_is_reported_once_and_the_server_renders_in_process(
