@@ -230,11 +230,15 @@ class SimLink:
     # --- services ---------------------------------------------------------------------------
     def call_async(self, method: str, params: dict) -> concurrent.futures.Future:
         """Send a request on its own NNG context; the future resolves with the decoded result."""
-        if self.dead:
-            failed: concurrent.futures.Future = concurrent.futures.Future()
-            failed.set_exception(SimLinkDead(method))
-            return failed
-        return asyncio.run_coroutine_threadsafe(self._request(method, params), self._loop)
+        if not self.dead:
+            coroutine = self._request(method, params)
+            try:
+                return asyncio.run_coroutine_threadsafe(coroutine, self._loop)
+            except RuntimeError:  # the loop was stopped and closed (the link is closed)
+                coroutine.close()
+        failed: concurrent.futures.Future = concurrent.futures.Future()
+        failed.set_exception(SimLinkDead(method))
+        return failed
 
     def call(self, method: str, params: dict, timeout: float = 30.0) -> Any:
         future = self.call_async(method, params)
@@ -267,14 +271,18 @@ class SimLink:
 
     def _run_loop(self) -> None:
         asyncio.set_event_loop(self._loop)
-        self._loop.run_forever()
+        try:
+            self._loop.run_forever()
+        finally:
+            self._loop.close()  # its selector and wake-up pipe go now, not whenever the collector runs
 
     def stop_loop(self) -> None:
         """Stop the request loop thread (pending requests are abandoned)."""
         if self._watched is not None:
             with contextlib.suppress(ValueError):
                 self._watched.remove_post_pipe_remove_cb(self._on_pipe_removed)
-        self._loop.call_soon_threadsafe(self._loop.stop)
+        with contextlib.suppress(RuntimeError):  # already stopped and closed
+            self._loop.call_soon_threadsafe(self._loop.stop)
         if threading.current_thread() is not self._loop_thread:
             self._loop_thread.join(timeout=5)
 

@@ -141,6 +141,7 @@ class RenderWorker:
         finally:
             theirs.close()
         self.starts += 1
+        self._answered = False
         self._conn = Connection(ours.detach())
         self._conn.send(self.world)
         return self._conn

@@ -86,6 +86,18 @@ def test_a_dead_link_fails_every_call_at_once_and_only_remembers_subscriptions()
     link.stop_loop()
 
 
+def test_a_closed_link_closes_its_request_loop_at_once_and_fails_later_calls():
+    class Client:
+        socket_topics = None
+
+    link = SimLink(Client())
+    link.close()  # a live link, closed on purpose (shutdown, or a replaced link)
+    assert link._loop.is_closed()  # its selector and wake-up pipe are closed now, not at collection time
+    with pytest.raises(SimLinkDead, match=r"^/Sim/X/Hover: the simulator connection is lost$"):
+        link.call("/Sim/X/Hover", {}, timeout=5)
+    link.stop_loop()  # a second stop is harmless
+
+
 def test_a_master_refusal_names_what_was_refused():
     assert _check("publisher", "/a", [1, "ok", 7]) == 7
     with pytest.raises(ReregisterError, match=r"^the master refused to register subscriber /b: nope$"):

@@ -142,3 +142,15 @@ def test_a_worker_that_cannot_start_is_reported_once_and_the_server_renders_in_p
     assert first == want and second == want
     assert caplog.text.count("the render worker does not start") == 1
     assert worker.starts == 1 and worker.pid is None
+
+
+def test_a_replacement_that_cannot_start_falls_back_to_rendering_in_process(worker, monkeypatch, caplog):
+    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    first = worker.pid
+    monkeypatch.setattr(render_worker, "_command", lambda fd, nice: ["/bin/false"])
+    os.kill(first, signal.SIGKILL)
+    wait_until(lambda: worker._proc.poll() is not None, 5.0, what="the worker to die")
+    with caplog.at_level(logging.WARNING, logger=render_worker.LOG.name):
+        image = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [3])[3]
+    assert image == camera.render(load_world(), POSITION, ORIENTATION, 32, 24, 90.0, [3])[3]
+    assert "the render worker does not start" in caplog.text and worker.starts == 2
