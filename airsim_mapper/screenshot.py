@@ -50,6 +50,19 @@ class ScreenshotError(RuntimeError):
     """The screenshot could not be taken (the message says which part failed)."""
 
 
+class ChildExited(ScreenshotError):
+    """A process of the pipeline exited early; the message ends with the tail of its log."""
+
+    def __init__(self, name: str, log: Path) -> None:
+        self.log = log
+        super().__init__(f"{name} exited early; see {log}:\n{tail(log)}")
+
+    def log_text(self) -> str:
+        with contextlib.suppress(OSError):
+            return self.log.read_text(errors="replace")
+        return ""
+
+
 # -- images -----------------------------------------------------------------------------------------------
 
 
@@ -310,7 +323,7 @@ class RvizStack:
     def check_running(self) -> None:
         for child in self.children:
             if not child.alive():
-                raise ScreenshotError(f"{child.name} exited early; see {child.log}:\n{tail(child.log)}")
+                raise ChildExited(child.name, child.log)
 
     def capture(self, out: Path) -> dict[str, float]:
         """The X screen as a PNG; returns its image statistics."""
@@ -335,7 +348,7 @@ def wait_for(predicate: Any, timeout: float, what: str, child: Child | None = No
 
     def ready() -> bool:
         if child is not None and not child.alive():
-            raise ScreenshotError(f"{child.name} exited early; see {child.log}:\n{tail(child.log)}")
+            raise ChildExited(child.name, child.log)
         return predicate()
 
     wait_until(ready, timeout, what, 0.25, ScreenshotError)
@@ -493,13 +506,19 @@ def rviz_crashed(error: str) -> bool:
     return _RVIZ_CRASH.search(error) is not None
 
 
+def crashed_rviz(exc: ScreenshotError) -> bool:
+    """The pipeline stopped because RViz crashed: judged on the whole log of the process that exited, since
+    what roslaunch prints after RViz dies (the mission's own shutdown) can push it out of the message."""
+    return isinstance(exc, ChildExited) and rviz_crashed(exc.log_text())
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     options = parse_args(args)
     try:
         report = take(options)
     except ScreenshotError as exc:
-        if rviz_crashed(str(exc)) and not os.environ.get(RETRIED_ENV):
+        if crashed_rviz(exc) and not os.environ.get(RETRIED_ENV):
             # RViz under Xvfb and Mesa's software renderer occasionally aborts at start-up ("corrupted
             # size vs. prev_size" in one CI run). Nothing of ours is involved: start again, once, afresh.
             print("screenshot: RViz crashed at start-up; trying once more from scratch", file=sys.stderr)

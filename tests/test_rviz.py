@@ -302,3 +302,21 @@ def test_a_crash_of_rviz_itself_is_told_from_other_early_exits():
     assert not rviz_crashed(crashed.replace("exit code -6", "exit code 1"))  # RViz quit: a real error
     assert not rviz_crashed(crashed.replace("[rviz-4]", "[headless_sim-1]"))
     assert not rviz_crashed("roslaunch exited early; see roslaunch.log:\nRLException: cannot launch node")
+
+
+def test_an_rviz_crash_is_found_in_the_whole_log_even_when_later_output_pushed_it_out_of_the_message(
+    tmp_path,
+):
+    from airsim_mapper.screenshot import ChildExited, ScreenshotError, crashed_rviz
+
+    log = tmp_path / "roslaunch.log"
+    crash = "REQUIRED process [rviz-4] has died!\nprocess has died [pid 21007, exit code -6, cmd rviz]\n"
+    after = "".join(f"[projectairsim-2] shutting down, line {i}\n" for i in range(40))
+    log.write_text("free(): invalid next size (fast)\n" + crash + after)
+    exited = ChildExited("roslaunch", log)
+    message = str(exited)
+    assert "REQUIRED process" not in message and "line 39" in message
+    assert crashed_rviz(exited)
+    log.write_text(crash.replace("exit code -6", "exit code 1") + after)
+    assert not crashed_rviz(ChildExited("roslaunch", log))
+    assert not crashed_rviz(ScreenshotError(crash))  # only an exited process's log counts
