@@ -30,8 +30,7 @@ import threading
 from collections.abc import Sequence
 from multiprocessing.connection import Connection
 from pathlib import Path
-
-import numpy as np
+from typing import Any
 
 from airsim_mapper.simserver import camera
 from airsim_mapper.simserver.world import World
@@ -68,33 +67,16 @@ class RenderWorker:
     def pid(self) -> int | None:
         return self._proc.pid if self._proc is not None else None
 
-    def render(
-        self,
-        position: np.ndarray,
-        orientation: np.ndarray,
-        width: int,
-        height: int,
-        fov_deg: float,
-        image_types: Sequence[int],
-        max_depth_vis: float = camera.DEFAULT_MAX_DEPTH_VIS,
-    ) -> dict[int, camera.RenderedImage]:
-        request = (
-            np.asarray(position, dtype=float),
-            np.asarray(orientation, dtype=float),
-            width,
-            height,
-            float(fov_deg),
-            list(image_types),
-            float(max_depth_vis),
-        )
+    def render(self, *args: Any) -> dict[int, camera.RenderedImage]:
+        """`camera.render(world, *args)`, answered by the child (pickled as given)."""
         with self._lock:
             if self._closed:
                 raise RenderWorkerError("the render worker is closed")
             if self._in_process:
-                return camera.render(self.world, *request)
+                return camera.render(self.world, *args)
             try:
                 conn = self._connection()
-                conn.send(request)
+                conn.send(args)
                 if not conn.poll(ANSWER_TIMEOUT_S):
                     raise RenderWorkerError(f"no answer within {ANSWER_TIMEOUT_S:g} s")
                 answer = conn.recv()
@@ -106,7 +88,7 @@ class RenderWorker:
                     raise RenderWorkerError(f"render worker failed ({reason})") from exc
                 LOG.error("the render worker does not start (%s); rendering in the server process", reason)
                 self._in_process = True
-                return camera.render(self.world, *request)
+                return camera.render(self.world, *args)
             self._answered = True
         if isinstance(answer, Exception):
             raise answer

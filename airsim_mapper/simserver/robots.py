@@ -117,8 +117,7 @@ class RobotRuntime:
 
     def ground_z(self, position: np.ndarray) -> float:
         """z of the first surface straight below `position` (the ground plane if the world misses)."""
-        x, y, z = (float(v) for v in position)
-        surface = self.world.surface_below((x, y, z - GROUND_PROBE_M), 1000.0)
+        surface = self.world.surface_below((position[0], position[1], position[2] - GROUND_PROBE_M), 1000.0)
         return surface if surface is not None else 0.0
 
     def _blocked(self, old: np.ndarray, new: np.ndarray) -> bool:

@@ -19,6 +19,7 @@ import numpy as np
 
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
+from airsim_mapper.simserver.camera import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
 IMAGE_TYPE_NAMES = SIM_IMAGE_LEAVES
@@ -52,7 +53,7 @@ class CaptureSetting:
     fov_deg: float
     capture_enabled: bool
     streaming_enabled: bool
-    max_depth_m: float = 100.0  # depth vis: metres that map to white (max-depth-meters)
+    max_depth_m: float = DEFAULT_MAX_DEPTH_VIS  # depth vis: metres that map to white (max-depth-meters)
 
 
 @dataclass(frozen=True)
@@ -192,7 +193,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
         fov = _number(item.get("fov-degrees", 90.0), f"{here} 'fov-degrees'")
         if not 0.0 < fov < 180.0:
             raise SceneError(f"{here} 'fov-degrees' must be in (0, 180), got {fov}")
-        max_depth = _number(item.get("max-depth-meters", 100.0), f"{here} 'max-depth-meters'")
+        max_depth = _number(item.get("max-depth-meters", DEFAULT_MAX_DEPTH_VIS), f"{here} 'max-depth-meters'")
         if max_depth <= 0.0:
             raise SceneError(f"{here} 'max-depth-meters' must be positive, got {max_depth}")
         captures.append(

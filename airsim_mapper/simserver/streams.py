@@ -147,7 +147,7 @@ class CameraStream:
             groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
         latest: dict[int, dict[str, Any]] = {}
         for (width, height, fov), types in groups.items():
-            vis = self.captures[camera.DEPTH_VIS] if camera.DEPTH_VIS in types else None
+            vis = self.captures.get(camera.DEPTH_VIS)
             max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
             rendered = self.render(position, orientation, width, height, fov, types, max_depth)
             for image_type, img in rendered.items():

@@ -130,10 +130,10 @@ class World:
         # columns of the candidate table: boxes first, then spheres
         self._column_object = np.concatenate([self._box_index, self._sphere_index]).astype(np.intp)
         column_objects = [self.objects[i] for i in self._column_object]
-        self._bound_center = np.array([o.center for o in column_objects], dtype=f32).reshape(-1, 3)
+        self._bound_center64 = np.array([o.center for o in column_objects], dtype=np.float64).reshape(-1, 3)
+        self._bound_center = self._bound_center64.astype(f32)
         self._bound_r2 = np.array([o.radius**2 for o in column_objects], dtype=f32) * f32(1.0001)
         self._bound_c2 = (self._bound_center**2).sum(axis=1)
-        self._bound_center64 = np.array([o.center for o in column_objects], dtype=np.float64).reshape(-1, 3)
         self._bound_radius = np.array([o.radius for o in column_objects], dtype=np.float64)
         self._box_top = (self._box_center[:, 2] - self._box_half[:, 2]).astype(np.float64)
         self._box_cols = np.ascontiguousarray(self._box_center.T)  # (3, B)
