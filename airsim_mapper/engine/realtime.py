@@ -1,10 +1,10 @@
-"""The bridge's process settings: the shared thread tuning, and rospy publishing without a yield.
+"""The bridge's process settings: the shared thread tuning, prompt rospy publishing, a frozen heap.
 
 `airsim_mapper.tuning` gives one BLAS thread and a 0.5 ms GIL switch interval. On top, the bridge uses
-`PromptQueuedConnection`: rospy's queued connection without its `time.sleep(0)` after every enqueue, which
-gave up the GIL once per publish, so a pose that fans out to six topics waited a switch interval per
-topic. `freeze_heap` keeps the objects of a running scene out of full collections, and `GcPauses` reports
-the longest garbage collection for the status topic.
+`PromptQueuedConnection`: rospy's queued connection, which here sends on the publishing thread when the
+socket takes the message at once, instead of waking a writer thread and yielding the GIL on every
+publish. `freeze_heap` keeps the objects of a running scene out of full collections, and `GcPauses`
+reports the longest garbage collection for the status topic.
 
 The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns them off for comparison.
 """
@@ -12,6 +12,7 @@ The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns 
 from __future__ import annotations
 
 import gc
+import socket
 import time
 
 import rospy
@@ -22,25 +23,77 @@ from airsim_mapper.tuning import tune_threads
 
 
 class PromptQueuedConnection(QueuedConnection):
-    """rospy's queued publisher connection without the `time.sleep(0)` after each enqueue.
+    """rospy's queued publisher connection that sends on the publishing thread when it can.
 
-    rospy ends every queued `write_data` with `time.sleep(0)` to let the connection's writer thread run.
-    That gives up the GIL once per publish and subscriber; with busy threads in the process, getting it
-    back costs up to a switch interval (5 ms) each time, so a pose message that fans out to six topics
-    waited tens of milliseconds between its own publishes (see the README's reliability section). Without
-    the yield the writer thread still wakes on the condition and sends as soon as it holds the GIL.
+    rospy hands every message to the connection's writer thread and then calls `time.sleep(0)`. Each
+    handoff wakes a thread that must take the GIL before it can send, and the yield gives the GIL away
+    once per publish and subscriber; with busy threads in the process a pose that fans out to six topics
+    waited tens of milliseconds between its own publishes (see the README's reliability section).
+
+    Here, when nothing is queued or being sent, `write_data` offers the message to the socket without
+    blocking (MSG_DONTWAIT). A message the socket takes whole is done; no thread wakes. If the socket
+    takes part of it, the rest becomes `_partial`, which the writer thread sends before anything else and
+    the queue limit never drops (a message cut short would corrupt the stream). If it takes nothing, or
+    anything is already waiting, the message is queued as in rospy. A slow subscriber therefore still
+    never blocks the publisher, and the queue's drop-oldest limit still applies.
     """
+
+    def __init__(self, connection, queue_size: int) -> None:
+        self._partial: memoryview | None = None  # the unsent rest of a message the socket took in part
+        self._busy = False  # the writer thread holds messages it took from the queue
+        super().__init__(connection, queue_size)
 
     def write_data(self, data: bytes) -> bool:
         with self._lock:
             if self._error:
                 error, self._error = self._error, None
                 raise error
+            if not self._queue and not self._busy and self._partial is None:
+                sent = self._send_now(data)
+                if sent == len(data):
+                    self._connection.stat_bytes += sent
+                    self._connection.stat_num_msg += 1
+                    return True
+                if sent:
+                    self._partial = memoryview(data)[sent:]
+                    self._connection.stat_bytes += sent
+                    self._cond_data_available.notify()
+                    return True
             if self._queue_size > 0 and len(self._queue) == self._queue_size:
                 del self._queue[0]
             self._queue.append(data)
             self._cond_data_available.notify()
         return True
+
+    def _send_now(self, data: bytes) -> int:
+        """Bytes of `data` the socket took without blocking; 0 leaves it all to the writer thread."""
+        sock = getattr(self._connection, "socket", None)
+        if sock is None or self._connection.done or sock.gettimeout() is not None:
+            return 0  # no socket yet, closing, or a socket with a timeout (send would poll first)
+        try:
+            return sock.send(data, socket.MSG_DONTWAIT)
+        except OSError:  # full (EAGAIN) or broken: the writer thread's sendall meets and reports errors
+            return 0
+
+    def _run(self) -> None:
+        connection = self._connection
+        while not connection.done:
+            with self._lock:
+                while not self._queue and self._partial is None and not connection.done:
+                    self._cond_data_available.wait()
+                partial, self._partial = self._partial, None
+                queue, self._queue = self._queue, []
+                self._busy = True
+            try:
+                for data in ([partial] if partial is not None else []) + queue:
+                    try:
+                        connection.write_data(data)  # rospy's blocking sendall, its error handling
+                    except Exception as exc:
+                        with self._lock:
+                            self._error = exc
+            finally:
+                with self._lock:
+                    self._busy = False
 
 
 def tune_process() -> None:

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import os
+import socket
+import struct
 import subprocess
 import sys
 import threading
 import time
 
 import pytest
+from harness import wait_until
 
 from airsim_mapper.engine.realtime import PromptQueuedConnection
 from airsim_mapper.tuning import SWITCH_INTERVAL_S
@@ -92,6 +95,138 @@ def test_a_writer_error_surfaces_on_the_next_publish() -> None:
         conn.write_data(b"next")
     transport.done = True
     conn._closed_connection_callback(transport)
+
+
+class SocketTransport:
+    """The part of a rospy TCPROS transport that the connection uses, over one end of a socket pair."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self.socket = sock
+        self.done = False
+        self.stat_bytes = 0
+        self.stat_num_msg = 0
+        self.writer_calls = 0  # sends made by the connection's writer thread
+
+    def set_cleanup_callback(self, _callback) -> None:
+        pass
+
+    def write_data(self, data) -> None:
+        self.writer_calls += 1
+        self.socket.sendall(data)
+        self.stat_bytes += len(data)
+        self.stat_num_msg += 1
+
+
+def framed(index: int, size: int) -> bytes:
+    """A length-prefixed message (as TCPROS frames them) whose body repeats its index."""
+    body = bytes([index % 251]) * size
+    return struct.pack("<I", len(body)) + body
+
+
+def read_frames(sock: socket.socket, count: int) -> list[bytes]:
+    """Read `count` length-prefixed messages; a message cut short would garble every later length."""
+    sock.settimeout(10)
+    buffer, frames = b"", []
+    while len(frames) < count:
+        buffer += sock.recv(1 << 20)
+        while len(buffer) >= 4 and len(buffer) >= 4 + struct.unpack("<I", buffer[:4])[0]:
+            size = struct.unpack("<I", buffer[:4])[0]
+            frames.append(buffer[4 : 4 + size])
+            buffer = buffer[4 + size :]
+    return frames
+
+
+def drain(sock: socket.socket, quiet_s: float = 0.5) -> list[bytes]:
+    """Every whole message that arrives until the socket has been quiet for `quiet_s`."""
+    sock.settimeout(quiet_s)
+    buffer = b""
+    while True:
+        try:
+            chunk = sock.recv(1 << 20)
+        except TimeoutError:
+            break
+        if not chunk:
+            break
+        buffer += chunk
+    frames = []
+    while buffer:
+        size = struct.unpack("<I", buffer[:4])[0]
+        assert len(buffer) >= 4 + size, "a message was cut short"
+        frames.append(buffer[4 : 4 + size])
+        buffer = buffer[4 + size :]
+    return frames
+
+
+@pytest.fixture
+def pair():
+    writer, reader = socket.socketpair()
+    writer.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 16 * 1024)
+    yield writer, reader
+    writer.close()
+    reader.close()
+
+
+def close(conn: PromptQueuedConnection, transport) -> None:
+    transport.done = True
+    conn._closed_connection_callback(transport)
+    conn._thread.join(5)
+
+
+def test_a_message_the_socket_takes_goes_out_on_the_publishing_thread(pair, no_sleep) -> None:
+    writer, reader = pair
+    transport = SocketTransport(writer)
+    conn = PromptQueuedConnection(transport, 10)
+    messages = [framed(i, 200) for i in range(20)]
+    for data in messages:
+        conn.write_data(data)
+        assert read_frames(reader, 1) == [data[4:]]
+    assert transport.writer_calls == 0  # no thread was woken
+    assert (transport.stat_num_msg, transport.stat_bytes) == (20, sum(map(len, messages)))
+    close(conn, transport)
+
+
+def test_a_stalled_subscriber_never_blocks_and_never_gets_a_cut_message(pair) -> None:
+    writer, reader = pair
+    transport = SocketTransport(writer)
+    conn = PromptQueuedConnection(transport, 2)
+    started = time.monotonic()
+    for i in range(40):  # 40 x 64 KB against a 16 KB send buffer and nobody reading
+        conn.write_data(framed(i, 64 * 1024))
+    assert time.monotonic() - started < 2.0
+    frames = drain(reader)
+    indices = [f[0] for f in frames]
+    # every message arrives whole: the first went out in part and was finished, the queue kept the newest
+    assert all(len(f) == 64 * 1024 for f in frames)
+    assert indices[0] == 0 and indices[-2:] == [38, 39] and indices == sorted(indices)
+    assert len(frames) <= 6  # the writer's first grab plus the queue's two, not all forty
+    close(conn, transport)
+
+
+def test_after_a_backlog_clears_sends_are_direct_again(pair) -> None:
+    writer, reader = pair
+    transport = SocketTransport(writer)
+    conn = PromptQueuedConnection(transport, 0)
+    for i in range(5):
+        conn.write_data(framed(i, 64 * 1024))
+    assert [f[0] for f in read_frames(reader, 5)] == [0, 1, 2, 3, 4]
+    wait_until(lambda: not conn._busy and not conn._queue, 5, what="the writer to go idle")
+    calls = transport.writer_calls
+    conn.write_data(framed(5, 100))
+    assert read_frames(reader, 1) == [bytes([5]) * 100]
+    assert transport.writer_calls == calls
+    close(conn, transport)
+
+
+def test_a_broken_socket_surfaces_on_the_next_publish(pair) -> None:
+    writer, reader = pair
+    transport = SocketTransport(writer)
+    conn = PromptQueuedConnection(transport, 1)
+    reader.close()
+    conn.write_data(framed(0, 100))
+    wait_until(lambda: conn._error is not None, 5, what="the writer's error")
+    with pytest.raises(OSError):
+        conn.write_data(framed(1, 100))
+    close(conn, transport)
 
 
 PROBE = (
