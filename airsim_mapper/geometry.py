@@ -110,33 +110,59 @@ def yaw_of(q: np.ndarray) -> float:
     return rpy_from_quat(q)[2]
 
 
-def compose(parent_pos: np.ndarray, parent_q: np.ndarray, child_pos: np.ndarray, child_q: np.ndarray):
-    """World pose of a child given its pose relative to a parent: returns (position, quaternion).
+# --- single poses as plain floats -------------------------------------------------------------------
+# The bridge converts one pose per message, 100 times a second per robot and several times per message
+# (camera frames, odometry). numpy's per-call overhead on 3- and 4-vectors costs ten times the arithmetic,
+# so these take any sequences of floats and return tuples.
 
-    Plain float arithmetic: it runs for every camera frame on every pose message (100 Hz), where numpy's
-    per-call overhead on 3- and 4-vectors cost ten times more.
-    """
-    pw, px, py, pz = (float(v) for v in parent_q)
-    norm = math.sqrt(pw * pw + px * px + py * py + pz * pz) or 1.0
-    pw, px, py, pz = pw / norm, px / norm, py / norm, pz / norm
-    vx, vy, vz = (float(v) for v in child_pos)
-    # v' = v + w t + u x t with t = 2 u x v (u = the quaternion's vector part)
-    tx, ty, tz = 2 * (py * vz - pz * vy), 2 * (pz * vx - px * vz), 2 * (px * vy - py * vx)
-    ox, oy, oz = (float(v) for v in parent_pos)
-    position = np.array(
-        [
-            ox + vx + pw * tx + (py * tz - pz * ty),
-            oy + vy + pw * ty + (pz * tx - px * tz),
-            oz + vz + pw * tz + (px * ty - py * tx),
-        ]
+Vec3 = tuple[float, float, float]
+Quat = tuple[float, float, float, float]
+
+
+def q_normalized(q: Any) -> Quat:
+    """A (w, x, y, z) quaternion scaled to unit length (a zero one is returned as it is)."""
+    w, x, y, z = (float(v) for v in q)
+    norm = math.sqrt(w * w + x * x + y * y + z * z) or 1.0
+    return w / norm, x / norm, y / norm, z / norm
+
+
+def q_mul(a: Any, b: Any) -> Quat:
+    """Hamilton product a*b of two single quaternions (apply b, then a)."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
     )
-    cw, cx, cy, cz = (float(v) for v in child_q)
-    w = pw * cw - px * cx - py * cy - pz * cz
-    x = pw * cx + px * cw + py * cz - pz * cy
-    y = pw * cy - px * cz + py * cw + pz * cx
-    z = pw * cz + px * cy - py * cx + pz * cw
-    qn = math.sqrt(w * w + x * x + y * y + z * z) or 1.0
-    return position, np.array([w / qn, x / qn, y / qn, z / qn])
+
+
+def q_rotate(q: Quat, v: Any) -> Vec3:
+    """The vector v rotated by the unit quaternion q."""
+    w, ux, uy, uz = q
+    vx, vy, vz = (float(c) for c in v)
+    # v' = v + w t + u x t with t = 2 u x v (u = the quaternion's vector part)
+    tx, ty, tz = 2 * (uy * vz - uz * vy), 2 * (uz * vx - ux * vz), 2 * (ux * vy - uy * vx)
+    return (
+        vx + w * tx + (uy * tz - uz * ty),
+        vy + w * ty + (uz * tx - ux * tz),
+        vz + w * tz + (ux * ty - uy * tx),
+    )
+
+
+def q_conjugate(q: Any) -> Quat:
+    w, x, y, z = q
+    return w, -x, -y, -z
+
+
+def compose(parent_pos: Any, parent_q: Any, child_pos: Any, child_q: Any) -> tuple[np.ndarray, np.ndarray]:
+    """World pose of a child given its pose relative to a parent: returns (position, quaternion)."""
+    parent = q_normalized(parent_q)
+    ox, oy, oz = (float(v) for v in parent_pos)
+    rx, ry, rz = q_rotate(parent, child_pos)
+    q = q_normalized(q_mul(parent, child_q))
+    return np.array([ox + rx, oy + ry, oz + rz]), np.array(q)
 
 
 def _three_floats(text: Any, key: str) -> tuple[float, float, float]:
@@ -161,6 +187,8 @@ def parse_origin(origin: Mapping[str, Any] | None) -> tuple[np.ndarray, np.ndarr
     """
     if not origin:
         return np.zeros(3), IDENTITY_Q.copy()
+    if not isinstance(origin, Mapping):
+        raise OriginError(f"origin must be a map of xyz and rpy or rpy-deg, got {origin!r}")
     position = np.array(_three_floats(origin["xyz"], "xyz")) if "xyz" in origin else np.zeros(3)
     if "rpy-deg" in origin:
         roll, pitch, yaw = (math.radians(v) for v in _three_floats(origin["rpy-deg"], "rpy-deg"))

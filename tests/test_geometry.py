@@ -8,7 +8,17 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from airsim_mapper.geometry import compose, quat_from_rpy, quat_multiply, quat_normalize, rotate
+from airsim_mapper.geometry import (
+    compose,
+    q_conjugate,
+    q_mul,
+    q_normalized,
+    q_rotate,
+    quat_from_rpy,
+    quat_multiply,
+    quat_normalize,
+    rotate,
+)
 
 angle = st.floats(-math.pi, math.pi)
 coord = st.floats(-100, 100)
@@ -32,3 +42,16 @@ def test_compose_of_a_yawed_parent_moves_the_child_sideways():
     )
     assert np.allclose(position, [1.0, 2.5, -3.9])
     assert np.allclose(q, east)
+
+
+quaternion = st.tuples(coord, coord, coord, coord).filter(lambda q: sum(v * v for v in q) > 1e-6)
+
+
+@given(quaternion, quaternion, st.tuples(coord, coord, coord))
+def test_the_single_pose_float_math_equals_the_vectorised_numpy_math(a, b, v):
+    assert np.allclose(q_mul(a, b), quat_multiply(np.array(a), np.array(b)), atol=1e-9)
+    unit = q_normalized(a)
+    assert np.allclose(unit, quat_normalize(np.array(a)), atol=1e-12)
+    assert np.allclose(q_rotate(unit, v), rotate(np.array(unit), np.array(v)), atol=1e-9)
+    assert np.allclose(q_rotate(q_conjugate(unit), q_rotate(unit, v)), v, atol=1e-9)
+    assert all(type(c) is float for c in (*q_mul(a, b), *q_normalized(a), *q_rotate(unit, v)))

@@ -11,11 +11,11 @@ params: ``child_frame_id`` (template over the bridge's variables, e.g. ``<robot_
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
 from geometry_msgs.msg import Twist, Vector3
 from nav_msgs.msg import Odometry
 
@@ -24,7 +24,7 @@ from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.pose import ros_pose
 from airsim_mapper.convert.stamps import header, sim_stamp
-from airsim_mapper.geometry import quat_conjugate, quat_multiply, quat_normalize, quat_to_matrix
+from airsim_mapper.geometry import Quat, Vec3, q_conjugate, q_mul, q_normalized, q_rotate
 from airsim_mapper.mapping.template import TemplateError, render
 
 ODOMETRY_KEY = "odometry"
@@ -35,29 +35,33 @@ class PoseSample:
     """One converted pose: sim time (ns), world position and body attitude in the output convention."""
 
     t_ns: int
-    position: np.ndarray
-    q: np.ndarray
-    linear: np.ndarray
-    angular: np.ndarray
+    position: Vec3
+    q: Quat
+    linear: Vec3
+    angular: Vec3
 
 
-def rotation_vector(q: np.ndarray) -> np.ndarray:
+ZERO: Vec3 = (0.0, 0.0, 0.0)
+
+
+def rotation_vector(q: Any) -> Vec3:
     """The axis * angle (rad) of a (w, x, y, z) rotation, taking the short way round."""
-    q = quat_normalize(q)
-    if q[0] < 0.0:
-        q = -q
-    sin_half = float(np.linalg.norm(q[1:]))
+    w, x, y, z = q_normalized(q)
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    sin_half = math.sqrt(x * x + y * y + z * z)
     if sin_half < 1e-12:
-        return 2.0 * q[1:]
-    return q[1:] * (2.0 * np.arctan2(sin_half, q[0]) / sin_half)
+        return 2.0 * x, 2.0 * y, 2.0 * z
+    scale = 2.0 * math.atan2(sin_half, w) / sin_half
+    return x * scale, y * scale, z * scale
 
 
-def body_twist(previous: PoseSample, position: np.ndarray, q: np.ndarray, dt_s: float):
+def body_twist(previous: PoseSample, position: Vec3, q: Quat, dt_s: float) -> tuple[Vec3, Vec3]:
     """(linear, angular) body-frame velocity that takes `previous` to (position, q) in dt_s seconds."""
-    world_velocity = (position - previous.position) / dt_s
-    linear = quat_to_matrix(q).T @ world_velocity
-    angular = rotation_vector(quat_multiply(quat_conjugate(previous.q), q)) / dt_s
-    return linear, angular
+    world_velocity = [(now - then) / dt_s for now, then in zip(position, previous.position)]
+    linear = q_rotate(q_conjugate(q), world_velocity)
+    ax, ay, az = rotation_vector(q_mul(q_conjugate(previous.q), q))
+    return linear, (ax / dt_s, ay / dt_s, az / dt_s)
 
 
 def child_frame(ctx: ConvertContext) -> str:
@@ -75,13 +79,13 @@ def odometry(msg: Mapping[str, Any], ctx: ConvertContext) -> Odometry:
     """sim PoseStamped (robot actual_pose) -> Odometry with the pose and a finite-difference twist."""
     position, q = sim_fields.pose(msg)
     t_ns = sim_stamp(msg).to_nsec()
-    q = quat_normalize(q)
     if ctx.enu:
         position, q = frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q)
+    position, q = tuple(map(float, position)), q_normalized(q)
     child = child_frame(ctx)
     key = (ODOMETRY_KEY, ctx.variables.get("robot_name"), child, ctx.convention)
     previous: PoseSample | None = ctx.shared.get(key)
-    linear, angular = np.zeros(3), np.zeros(3)
+    linear, angular = ZERO, ZERO
     if previous is not None:
         linear, angular = previous.linear, previous.angular
         if t_ns > previous.t_ns:
@@ -89,5 +93,5 @@ def odometry(msg: Mapping[str, Any], ctx: ConvertContext) -> Odometry:
     ctx.shared[key] = PoseSample(t_ns, position, q, linear, angular)
     out = Odometry(header=header(msg, ctx), child_frame_id=child)
     out.pose.pose = ros_pose(position, q)
-    out.twist.twist = Twist(Vector3(*map(float, linear)), Vector3(*map(float, angular)))
+    out.twist.twist = Twist(Vector3(*linear), Vector3(*angular))
     return out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import Any
 
@@ -17,10 +18,10 @@ from airsim_mapper.geometry import OriginError, compose, parse_origin
 CAMERA_POSE_KEY = "camera_pose"
 
 
-def ros_pose(position: np.ndarray, q_wxyz: np.ndarray) -> Pose:
-    """geometry_msgs/Pose of a position and a (w, x, y, z) quaternion."""
-    x, y, z = (float(v) for v in position)
-    w, qx, qy, qz = (float(v) for v in q_wxyz)
+def ros_pose(position: Any, q_wxyz: Any) -> Pose:
+    """geometry_msgs/Pose of a position and a (w, x, y, z) quaternion (arrays or float sequences)."""
+    x, y, z = map(float, position)
+    w, qx, qy, qz = map(float, q_wxyz)
     return Pose(position=Point(x, y, z), orientation=Quaternion(qx, qy, qz, w))
 
 
@@ -64,9 +65,20 @@ def camera_mount(ctx: ConvertContext) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(position, dtype=float), np.asarray(q, dtype=float)
     origin = ctx.source.get("camera_origin")
     try:
-        return parse_origin(origin)
+        try:
+            return parsed_origin(tuple(origin.items())) if origin else parse_origin(origin)
+        except (TypeError, AttributeError):  # not a map of strings: parse it as it is, for the error
+            return parse_origin(origin)
     except (OriginError, TypeError, AttributeError) as exc:
         raise ConversionError(f"camera_origin: {exc}") from exc
+
+
+@functools.lru_cache(maxsize=256)
+def parsed_origin(items: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """`parse_origin` of an origin's items, parsed once per distinct origin (TypeError if unhashable)."""
+    position, q = parse_origin(dict(items))
+    position.flags.writeable = q.flags.writeable = False  # shared between calls
+    return position, q
 
 
 @sim_fields.converter("camera_pose")

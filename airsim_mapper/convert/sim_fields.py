@@ -40,6 +40,8 @@ def converter(name: str) -> Callable[[F], F]:
 
 
 def as_map(value: Any, where: str) -> Mapping[str, Any]:
+    if type(value) is dict:  # what msgpack gives; skips the slower abstract-class check
+        return value
     if not isinstance(value, Mapping):
         raise ConversionError(f"{where} must be a map, got {type(value).__name__}")
     return value
@@ -55,6 +57,8 @@ def field(msg: Any, key: str, where: str = "message") -> Any:
 
 def number(value: Any, where: str, finite: bool = True) -> float:
     """A real number (int or float, not bool); finite unless told otherwise."""
+    if type(value) is float and (not finite or math.isfinite(value)):  # the common case, quickly
+        return value
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ConversionError(f"{where} must be a number, got {value!r}")
     result = float(value)
@@ -70,24 +74,29 @@ def integer(value: Any, where: str) -> int:
 
 
 def number_field(msg: Any, key: str, where: str = "message", finite: bool = True) -> float:
-    return number(field(msg, key, where), f"{where}.{key}" if where != "message" else key, finite)
+    value = field(msg, key, where)
+    if type(value) is float and (not finite or math.isfinite(value)):  # the common case, quickly
+        return value
+    return number(value, f"{where}.{key}" if where != "message" else key, finite)
 
 
 def vector3(msg: Any, key: str, where: str = "message") -> np.ndarray:
     """A sim Vector3 ``{x, y, z}`` as a float array (finite)."""
     name = key if where == "message" else f"{where}.{key}"
     value = as_map(field(msg, key, where), name)
-    return np.array([number_field(value, axis, name) for axis in ("x", "y", "z")])
+    return np.array(
+        [number_field(value, "x", name), number_field(value, "y", name), number_field(value, "z", name)]
+    )
 
 
 def quaternion(msg: Any, key: str, where: str = "message") -> np.ndarray:
     """A sim Quaternion ``{w, x, y, z}`` as a (w, x, y, z) float array; finite and non-zero."""
     name = key if where == "message" else f"{where}.{key}"
     value = as_map(field(msg, key, where), name)
-    q = np.array([number_field(value, axis, name) for axis in ("w", "x", "y", "z")])
-    if not np.any(q):
+    w, x, y, z = (number_field(value, axis, name) for axis in "wxyz")
+    if not (w or x or y or z):
         raise ConversionError(f"{name} is a zero quaternion")
-    return q
+    return np.array([w, x, y, z])
 
 
 def pose(msg: Any, key: str | None = None, where: str = "message") -> tuple[np.ndarray, np.ndarray]:

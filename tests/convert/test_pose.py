@@ -12,7 +12,13 @@ from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from airsim_mapper.convert.command import camera_desired_pose
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.pose import camera_pose, camera_pose_key, camera_pose_override, pose_stamped
+from airsim_mapper.convert.pose import (
+    camera_mount,
+    camera_pose,
+    camera_pose_key,
+    camera_pose_override,
+    pose_stamped,
+)
 from airsim_mapper.geometry import quat_from_rpy, rpy_from_quat
 
 H = math.sqrt(0.5)
@@ -123,6 +129,22 @@ def test_camera_pose_in_enu_converts_the_composed_pose(roundtrip):
 def test_camera_pose_with_a_malformed_mount_is_rejected():
     with pytest.raises(ConversionError, match=r"camera_pose: camera_origin: origin 'xyz' must hold three"):
         camera_pose(sim_pose(), camera_ctx(origin={"xyz": "1 2"}))
+
+
+def test_a_mount_that_is_not_a_map_of_strings_gets_the_same_precise_error():
+    for origin, error in (
+        ({"xyz": [1, 2, 3]}, r"origin 'xyz' must be a string of three numbers"),
+        ("1 2 3", r"camera_origin: origin must be a map"),
+    ):
+        with pytest.raises(ConversionError, match=error):
+            camera_pose(sim_pose(), camera_ctx(origin=origin))
+
+
+def test_a_mount_is_parsed_once_and_its_shared_arrays_cannot_be_changed():
+    first, second = camera_mount(camera_ctx()), camera_mount(camera_ctx())
+    assert first[0] is second[0] and first[1] is second[1]
+    with pytest.raises(ValueError):
+        first[0][0] = 5.0
 
 
 def test_a_camera_pose_command_feeds_the_published_camera_pose_in_both_conventions():
