@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 from bridgeharness import Rig, published_topics
+from harness import wait_until
 
 ROBOT = "/airsim_node/Drone1"
 IMAGE_TYPES = (
@@ -157,10 +158,20 @@ def test_depth_is_in_metres_to_the_ground_along_the_camera_axis(rig: Rig):
 
 def test_point_cloud_points_lie_on_the_ground_in_the_map_frame(rig: Rig):
     import rospy
-    import tf2_ros
     from sensor_msgs.msg import PointCloud2
 
-    cloud = receive(f"{ROBOT}/lidar1/lidar", PointCloud2)
+    # the lidar's frame comes with its scans: keep a subscriber while looking it up, as RViz does
+    keep = rospy.Subscriber(f"{ROBOT}/lidar1/lidar", PointCloud2, lambda m: None, queue_size=1)
+    try:
+        check_cloud_on_ground(receive(f"{ROBOT}/lidar1/lidar", PointCloud2))
+    finally:
+        keep.unregister()
+
+
+def check_cloud_on_ground(cloud) -> None:
+    import rospy
+    import tf2_ros
+
     names = [f.name for f in cloud.fields]
     assert names == ["x", "y", "z", "intensity", "segmentation"]
     assert cloud.header.frame_id == "airsim_node/Drone1/lidar1"
@@ -203,9 +214,17 @@ def test_radar_detects_the_block_ahead(rig: Rig):
 def test_tf_resolves_every_documented_frame_from_map(rig: Rig):
     import rospy
     import tf2_ros
+    from radar_msgs.msg import RadarScan
+    from sensor_msgs.msg import PointCloud2
 
     buffer = tf2_ros.Buffer()
     tf2_ros.TransformListener(buffer)
+    # A lidar's or radar's frame comes with its scans, so it is in tf while its topic has a subscriber
+    # (as with RViz showing the cloud); the robot's and the cameras' frames come from actual_pose.
+    readers = [
+        rospy.Subscriber(f"{ROBOT}/lidar1/lidar", PointCloud2, lambda m: None, queue_size=1),
+        rospy.Subscriber(f"{ROBOT}/radar1/radar_detections", RadarScan, lambda m: None, queue_size=1),
+    ]
     frames = [
         "airsim_node/Drone1",
         "airsim_node/Drone1/Chase/scene_camera",
@@ -213,9 +232,13 @@ def test_tf_resolves_every_documented_frame_from_map(rig: Rig):
         "airsim_node/Drone1/lidar1",
         "airsim_node/Drone1/radar1",
     ]
-    for frame in frames:
-        tf = buffer.lookup_transform("map", frame, rospy.Time(0), rospy.Duration(10))
-        assert tf.child_frame_id == frame
+    try:
+        for frame in frames:
+            tf = buffer.lookup_transform("map", frame, rospy.Time(0), rospy.Duration(10))
+            assert tf.child_frame_id == frame
+    finally:
+        for reader in readers:
+            reader.unregister()
     body = buffer.lookup_transform("map", "airsim_node/Drone1", rospy.Time(0)).transform.translation
     down = buffer.lookup_transform("map", "airsim_node/Drone1/DownCamera/depth_camera", rospy.Time(0))
     # The camera frame is the body frame moved by the camera's mount (0.2, 0, 0.1) in FRD.
@@ -273,3 +296,38 @@ def test_diagnostics_report_every_bridge_by_its_validate_mapping_name(rig: Rig):
         )
     finally:
         sub.unregister()
+
+
+def test_a_lazy_stream_leaves_the_simulator_with_its_last_subscriber_and_light_ones_run_inline(rig: Rig):
+    import json
+
+    import rospy
+    from sensor_msgs.msg import Image, Imu
+    from std_msgs.msg import String
+
+    prefix = "/Sim/SceneDroneSensors/robots/Drone1"
+    image_topic = f"{prefix}/sensors/DownCamera/depth_planar_camera"
+    imu_topic = f"{prefix}/sensors/IMU1/imu_kinematics"
+    latest: dict = {}
+
+    def on_status(msg) -> None:
+        latest.update(json.loads(msg.data))
+
+    def handled(topic: str) -> int:
+        return latest.get("streams", {}).get(topic, {}).get("handled", 0)
+
+    status = rospy.Subscriber("/airsim_mapper/sensors_bridge/status", String, on_status)
+    image = rospy.Subscriber(f"{ROBOT}/DownCamera/depth_planar_camera/image", Image, lambda m: None)
+    imu = rospy.Subscriber(f"{ROBOT}/IMU1/imu", Imu, lambda m: None)
+    try:
+        wait_until(lambda: handled(image_topic) > 0 and handled(imu_topic) > 0, 30, what="images and imu")
+        streams = latest["streams"]
+        assert streams[image_topic]["inline"] is False  # images have a worker of their own
+        assert streams[imu_topic]["inline"] is True and streams[f"{prefix}/actual_pose"]["inline"] is True
+        image.unregister()
+        imu.unregister()
+        wait_until(lambda: not {image_topic, imu_topic} & set(latest["streams"]), 30, what="streams to leave")
+        assert f"{prefix}/actual_pose" in latest["streams"]  # not lazy: it stays
+    finally:
+        for sub in (image, imu, status):
+            sub.unregister()

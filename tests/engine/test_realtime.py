@@ -160,6 +160,7 @@ def drain(sock: socket.socket, quiet_s: float = 0.5) -> list[bytes]:
 @pytest.fixture
 def pair():
     writer, reader = socket.socketpair()
+    writer.setblocking(True)  # as rospy's write_header leaves a publisher's socket (rospy may set a default)
     writer.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 16 * 1024)
     yield writer, reader
     writer.close()
@@ -214,6 +215,17 @@ def test_after_a_backlog_clears_sends_are_direct_again(pair) -> None:
     conn.write_data(framed(5, 100))
     assert read_frames(reader, 1) == [bytes([5]) * 100]
     assert transport.writer_calls == calls
+    close(conn, transport)
+
+
+def test_a_socket_with_a_timeout_is_left_to_the_writer_thread(pair) -> None:
+    writer, reader = pair
+    writer.settimeout(5.0)  # a send on it would wait for room first: never on the publishing thread
+    transport = SocketTransport(writer)
+    conn = PromptQueuedConnection(transport, 10)
+    conn.write_data(framed(1, 100))
+    assert read_frames(reader, 1) == [bytes([1]) * 100]
+    assert transport.writer_calls == 1
     close(conn, transport)
 
 
