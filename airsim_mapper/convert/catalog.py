@@ -27,33 +27,10 @@ class ConverterInfo:
     module: str  # module in airsim_mapper.convert holding the function
     function: str
     summary: str
-    # Light: tens of microseconds per message, no arrays, so the bridge runs it on the simulator receive
-    # thread (engine/streams.py) instead of waking a worker thread for each message.
-    light: bool = False
-
-
-LIGHT = frozenset(
-    {
-        "pose",
-        "camera_pose",
-        "camera_optical_pose",
-        "odometry",
-        "collision",
-        "clock",
-        "imu",
-        "gps",
-        "barometer",
-        "magnetometer",
-        "distance",
-        "battery",
-        "airspeed",
-    }
-)
 
 
 def _c(name, direction, ros_types, sim_kind, module, function, summary) -> ConverterInfo:
-    light = name in LIGHT
-    return ConverterInfo(name, direction, tuple(ros_types), sim_kind, module, function, summary, light)
+    return ConverterInfo(name, direction, tuple(ros_types), sim_kind, module, function, summary)
 
 
 CONVERTERS: dict[str, ConverterInfo] = {

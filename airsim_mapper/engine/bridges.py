@@ -12,7 +12,6 @@ from typing import Any
 import rospy
 
 from airsim_mapper.convert import registry
-from airsim_mapper.convert.catalog import CONVERTERS
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.hub import StreamHub
@@ -105,8 +104,6 @@ class SimToRos(Bridge):
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        info = CONVERTERS.get(spec.converter)
-        self.light = bool(info and info.light)  # cheap enough to run on the receive thread
         self.publisher: rospy.Publisher | None = None
         self._attached = False
         self._stopped = False
@@ -147,7 +144,7 @@ class SimToRos(Bridge):
                 return
             self._attached = attached
             if attached:
-                self.services.hub.attach(self.topic, self.handle, light=self.light)
+                self.services.hub.attach(self.topic, self.handle)
             else:
                 self.services.hub.detach(self.topic, self.handle)
 

@@ -300,7 +300,6 @@ class Engine:
                 "handled": s.stats.handled,
                 "errors": s.stats.errors,
                 "age_s": round(now - s.stats.last_receive, 3) if s.stats.last_receive else None,
-                "inline": s.inline,  # handled on the receive thread (light converters only)
                 **s.stats.take_peaks(),
             }
             for topic, s in self.hub.streams().items()

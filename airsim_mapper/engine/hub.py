@@ -1,7 +1,4 @@
-"""One Stream per subscribed simulator topic, shared by every bridge that reads it.
-
-A stream runs inline (on the receive thread) while every handler attached to it was attached as light.
-"""
+"""One Stream per subscribed simulator topic, shared by every bridge that reads it."""
 
 from __future__ import annotations
 
@@ -19,36 +16,26 @@ class StreamHub:
         self._sim = sim
         self._on_transforms = on_transforms
         self._streams: dict[str, Stream] = {}
-        self._light: set[Handler] = set()  # handlers cheap enough for the receive thread
         self._lock = threading.Lock()
 
-    def attach(self, topic: str, handler: Handler, light: bool = False) -> None:
-        """Feed `topic` to `handler`; `light` ones (tens of microseconds, never blocking) may run inline."""
+    def attach(self, topic: str, handler: Handler) -> None:
         with self._lock:
-            if light:
-                self._light.add(handler)
             stream = self._streams.get(topic)
             if stream is not None:
                 stream.handlers = [*stream.handlers, handler]
-                stream.inline = self._all_light(stream.handlers)
                 return
-            stream = Stream(topic, self._on_transforms, [handler], inline=light)
+            stream = Stream(topic, self._on_transforms, [handler])
             self._streams[topic] = stream
             self._sim.subscribe(topic, stream.offer)
-
-    def _all_light(self, handlers: list[Handler]) -> bool:
-        return all(h in self._light for h in handlers)
 
     def detach(self, topic: str, handler: Handler) -> None:
         with self._lock:
             stream = self._streams.get(topic)
             if stream is None:
                 return
-            self._light.discard(handler)
             # bound methods are made afresh on each access: equal, not identical
             stream.handlers = [h for h in stream.handlers if h != handler]
             if stream.handlers:
-                stream.inline = self._all_light(stream.handlers)
                 return
             del self._streams[topic]
         self._sim.unsubscribe(topic, stream.offer)

@@ -1,12 +1,9 @@
-"""Per-topic streams: light messages are handled on the receive thread, heavy ones by a worker.
+"""Per-topic workers: the client's receive thread only hands a message over, a worker converts it.
 
-Each subscribed simulator topic gets one `Stream`, which runs the handlers of every bridge fed by that
-topic. A stream whose handlers are all light (poses, instruments, clock: tens of microseconds, no arrays,
-publishing never blocks) is `inline`: the receive thread runs them as the message arrives, so a pose
-reaches ROS without waking another thread. Any other stream has a slot holding the newest message and a
-thread that takes it. A message that arrives while the previous one is still waiting replaces it
-(drop-oldest, depth 1) and is counted, so a slow image conversion never delays pose, tf or commands, and
-never builds a backlog. A stream's handlers never run twice at once, whichever thread runs them.
+Each subscribed simulator topic gets one `Stream`: a slot holding the newest message and a thread that
+takes it and runs the handlers of every bridge fed by that topic. A message that arrives while the previous
+one is still waiting replaces it (drop-oldest, depth 1) and is counted, so a slow image conversion never
+delays pose, tf or commands, and never builds a backlog.
 """
 
 from __future__ import annotations
@@ -56,10 +53,8 @@ class Stream:
     on_transforms: Callable[[list], None] | None = None
     handlers: list[Handler] = field(default_factory=list)
     stats: StreamStats = field(default_factory=StreamStats)
-    inline: bool = False  # run the handlers on the offering thread (set by the hub for light handlers)
 
     def __post_init__(self) -> None:
-        self._run_lock = threading.Lock()  # one run of the handlers at a time
         self._cond = threading.Condition()
         self._pending: Any = None
         self._has_pending = False
@@ -68,10 +63,7 @@ class Stream:
         self._thread.start()
 
     def offer(self, _topic_info: Any, message: Any) -> None:
-        """Receive-thread callback: handle the message here (inline) or store it and wake the worker.
-
-        Never raises. An inline stream blocks only while its handlers run (or finish an earlier run).
-        """
+        """Client receive-thread callback: store the message and wake the worker. Never blocks or raises."""
         now = time.monotonic()
         with self._cond:
             stats = self.stats
@@ -79,14 +71,11 @@ class Stream:
                 stats.arrival_gap_max = max(stats.arrival_gap_max, now - stats.last_receive)
             stats.received += 1
             stats.last_receive = now
-            if not self.inline or self._has_pending:  # to the worker (it still has one waiting)
-                if self._has_pending:
-                    stats.dropped += 1
-                self._pending = message
-                self._has_pending = True
-                self._cond.notify()
-                return
-        self._handle(message, now)
+            if self._has_pending:
+                stats.dropped += 1
+            self._pending = message
+            self._has_pending = True
+            self._cond.notify()
 
     def _work(self) -> None:
         while True:
@@ -96,15 +85,11 @@ class Stream:
                 if not self._running:
                     return
                 message, self._pending, self._has_pending = self._pending, None, False
+                handlers = list(self.handlers)
                 arrived = self.stats.last_receive
-            self._handle(message, arrived)
-
-    def _handle(self, message: Any, arrived: float) -> None:
-        """Run every handler on one message, then send their transforms together."""
-        with self._run_lock:
             start = time.monotonic()
             transforms: list = []
-            for handler in self.handlers:  # the hub replaces the list, never changes it
+            for handler in handlers:
                 try:
                     transforms.extend(handler(message) or ())
                 except Exception:  # a handler bug must not kill the stream

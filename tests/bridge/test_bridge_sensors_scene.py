@@ -298,7 +298,7 @@ def test_diagnostics_report_every_bridge_by_its_validate_mapping_name(rig: Rig):
         sub.unregister()
 
 
-def test_a_lazy_stream_leaves_the_simulator_with_its_last_subscriber_and_light_ones_run_inline(rig: Rig):
+def test_a_lazy_stream_leaves_the_simulator_with_its_last_subscriber(rig: Rig):
     import json
 
     import rospy
@@ -321,9 +321,6 @@ def test_a_lazy_stream_leaves_the_simulator_with_its_last_subscriber_and_light_o
     imu = rospy.Subscriber(f"{ROBOT}/IMU1/imu", Imu, lambda m: None)
     try:
         wait_until(lambda: handled(image_topic) > 0 and handled(imu_topic) > 0, 30, what="images and imu")
-        streams = latest["streams"]
-        assert streams[image_topic]["inline"] is False  # images have a worker of their own
-        assert streams[imu_topic]["inline"] is True and streams[f"{prefix}/actual_pose"]["inline"] is True
         image.unregister()
         imu.unregister()
         wait_until(lambda: not {image_topic, imu_topic} & set(latest["streams"]), 30, what="streams to leave")
