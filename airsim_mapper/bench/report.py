@@ -38,7 +38,6 @@ def costs_table(costs: dict[str, dict[str, Any]]) -> str:
         "bridge/bare",
         "unpack client",
         "unpack fast",
-        "view proto",
     ]
     rows = []
     for name, c in costs.items():
@@ -55,7 +54,6 @@ def costs_table(costs: dict[str, dict[str, Any]]) -> str:
                 f"{c['ratio_to_bare_serialize']:.2f}" if "ratio_to_bare_serialize" in c else "-",
                 _ms(c.get("unpack_client_ms")),
                 _ms(c.get("unpack_fast_ms")),
-                _ms(c.get("view_prototype_ms")),
             ]
         )
     notes = [
@@ -204,21 +202,9 @@ def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
             1.2,
             c[BGR]["ratio_to_bare_serialize"] <= 1.2,
             "x",
-            "the bridge must copy the pixels out of the frame once: genpy packs uint8[] only from bytes",
+            "pixels stay a view of the received frame and are written once, by BufferImage's serialiser",
         ),
     ]
-    if "view_prototype_ms" in c[BGR]:
-        ratio = c[BGR]["view_prototype_ms"] / c[BGR]["bare_serialize_ms"]
-        out.append(
-            _target(
-                "1080p BGR with the memoryview Image prototype / bare rospy serialisation",
-                ratio,
-                1.2,
-                ratio <= 1.2,
-                "x",
-                "pixels kept as a view into the received frame and written once by the serialiser",
-            )
-        )
     e2e = results.get("e2e")
     if not e2e:
         return out

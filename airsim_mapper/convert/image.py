@@ -1,15 +1,19 @@
 """sim Image -> sensor_msgs/Image.
 
-Encodings: ``BGR`` -> bgr8 (the sim's bytes object itself, no copy), ``PNG`` -> decoded bgr8, ``16FC1``
+Encodings: ``BGR`` -> bgr8 (the sim's buffer itself, no copy), ``PNG`` -> decoded bgr8, ``16FC1``
 (float16 metres, the 1.1.0 depth format) -> 32FC1 metres, legacy ``16UC1`` (uint16 millimetres) -> 32FC1
 metres, ``GRAY8`` -> mono8, and the git server's ``32FC1`` (pixels in ``data`` or ``data_float``) -> 32FC1.
 ``data`` may be bytes (topic form), another bytes-like object, or a list of ints (GetImages form).
 float16 -> float32 uses OpenCV's SIMD conversion (bit-exact with numpy's astype, about ten times faster).
+
+The result is a `BufferImage`: a sensor_msgs/Image whose ``data`` may be any byte buffer (bytes, or a
+memoryview of the received frame or of the converted pixels), written out as it is when published.
 """
 
 from __future__ import annotations
 
 import functools
+import struct
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -41,10 +45,43 @@ ENCODINGS: dict[str, Encoding] = {
 MM_PER_M = 1000.0
 
 
-def pixel_bytes(data: Any) -> bytes:
-    """The pixel payload as bytes: bytes as is (no copy); bytes-like copied once; a list of ints packed."""
+class BufferImage(Image):
+    """sensor_msgs/Image (same type, md5sum and bytes on the wire) whose ``data`` may be any byte buffer.
+
+    genpy packs ``uint8[]`` with `struct`, which takes only bytes and copies them once more on the way into
+    the buffer. This writes the pixels as they are: every other field through genpy, then the pixels'
+    length and the buffer itself.
+    """
+
+    __slots__ = Image.__slots__  # genpy validates keyword fields against the class's own __slots__
+    _slot_types = Image._slot_types
+
+    def serialize(self, buff: Any) -> None:
+        data, self.data = self.data, b""
+        try:
+            Image.serialize(self, buff)  # the pixels as an empty uint8[]: a zero length, last
+        finally:
+            self.data = data
+        buff.seek(buff.tell() - 4)
+        buff.write(struct.pack("<I", memoryview(data).nbytes))
+        buff.write(data)
+
+
+def as_bytes_view(array: np.ndarray) -> memoryview:
+    """The bytes of a numpy array as a flat memoryview, without a copy when it is contiguous."""
+    return memoryview(np.ascontiguousarray(array)).cast("B")
+
+
+Pixels = bytes | memoryview  # a flat byte buffer
+
+
+def pixel_bytes(data: Any) -> Pixels:
+    """The pixel payload as a flat byte buffer: bytes and contiguous memoryviews as they are (no copy);
+    other bytes-likes copied once; a list of ints packed."""
     if isinstance(data, bytes):
         return data
+    if isinstance(data, memoryview) and data.c_contiguous:
+        return data.cast("B") if data.format != "B" or data.ndim != 1 else data
     if isinstance(data, (bytearray, memoryview)):
         return bytes(data)
     if isinstance(data, np.ndarray):
@@ -57,7 +94,7 @@ def pixel_bytes(data: Any) -> bytes:
     raise ConversionError(f"image: data must be bytes or a list of ints, got {type(data).__name__}")
 
 
-def _check_size(data: bytes, height: int, width: int, encoding: str, per_pixel: int) -> None:
+def _check_size(data: Pixels, height: int, width: int, encoding: str, per_pixel: int) -> None:
     expected = height * width * per_pixel
     if len(data) != expected:
         raise ConversionError(
@@ -65,7 +102,7 @@ def _check_size(data: bytes, height: int, width: int, encoding: str, per_pixel: 
         )
 
 
-def _decode_png(data: bytes, height: int, width: int) -> bytes:
+def _decode_png(data: Pixels, height: int, width: int) -> Pixels:
     import cv2
 
     if not data:
@@ -80,7 +117,7 @@ def _decode_png(data: bytes, height: int, width: int) -> bytes:
         raise ConversionError(
             f"image: PNG decodes to {decoded.shape[1]}x{decoded.shape[0]}, expected {width}x{height}"
         )
-    return decoded.tobytes()
+    return as_bytes_view(decoded)
 
 
 @functools.lru_cache(maxsize=1)
@@ -93,7 +130,7 @@ def _half_to_float() -> Callable[[np.ndarray], np.ndarray] | None:
     return getattr(cv2, "convertFp16", None)
 
 
-def half_to_float32(data: bytes, height: int, width: int, order: str = "<") -> np.ndarray:
+def half_to_float32(data: Pixels, height: int, width: int, order: str = "<") -> np.ndarray:
     """float16 pixels -> little-endian float32 (inf and NaN kept), vectorised."""
     convert = _half_to_float()
     if convert is None or height * width == 0:
@@ -104,7 +141,7 @@ def half_to_float32(data: bytes, height: int, width: int, order: str = "<") -> n
     return convert(halves.view("<i2").reshape(height, width)).astype("<f4", copy=False)
 
 
-def _float_pixels(encoding: str, data: bytes, height: int, width: int, order: str) -> np.ndarray:
+def _float_pixels(encoding: str, data: Pixels, height: int, width: int, order: str) -> np.ndarray:
     if encoding == "16FC1":
         return half_to_float32(data, height, width, order)
     if encoding == "16UC1":
@@ -112,14 +149,14 @@ def _float_pixels(encoding: str, data: bytes, height: int, width: int, order: st
     return np.frombuffer(data, dtype=f"{order}f4").astype("<f4", copy=False)
 
 
-def _payload(msg: Mapping[str, Any], encoding: str) -> bytes:
+def _payload(msg: Mapping[str, Any], encoding: str) -> Pixels:
     data = sim_fields.field(msg, "data", "image")
     data_float = msg.get("data_float")  # a list, or a numpy array on the fast path
     if encoding == "32FC1" and not len(data) and data_float is not None and len(data_float):
         values = np.asarray(data_float, dtype="<f4")
         if values.ndim != 1:
             raise ConversionError("image: data_float must be a flat list of numbers")
-        return values.tobytes()
+        return as_bytes_view(values)
     return pixel_bytes(data)
 
 
@@ -144,8 +181,8 @@ def image(msg: Mapping[str, Any], ctx: ConvertContext) -> Image:
     else:
         _check_size(data, height, width, encoding, spec.in_bytes)
         if spec.ros == "32FC1":
-            data = _float_pixels(encoding, data, height, width, order).tobytes()
-    return Image(
+            data = as_bytes_view(_float_pixels(encoding, data, height, width, order))
+    return BufferImage(
         header=header(msg, ctx),
         height=height,
         width=width,

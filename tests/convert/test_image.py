@@ -203,3 +203,49 @@ def test_the_simulators_camera_info_on_the_disparity_image_topic_is_skipped_not_
     ctx = ConvertContext(source={"fov-degrees": 90})
     assert image(sim_info, ctx) is None
     assert camera_info(sim_info, ctx) is None
+
+
+def wire(msg) -> bytes:
+    from io import BytesIO
+
+    buff = BytesIO()
+    msg.serialize(buff)
+    return buff.getvalue()
+
+
+def test_images_go_on_the_wire_byte_for_byte_as_genpy_writes_them():
+    from sensor_msgs.msg import Image
+
+    bgr = np.arange(4 * 3 * 3, dtype=np.uint8).reshape(3, 4, 3)
+    depth = np.linspace(0.5, 40.0, 12, dtype=np.float16)
+    frame = b"header" + bgr.tobytes() + b"trailer"
+    cases = {
+        "BGR bytes": sim_image("BGR", bgr.tobytes(), 4, 3),
+        "BGR view of a frame": sim_image("BGR", memoryview(frame)[6 : 6 + bgr.size], 4, 3),
+        "PNG": sim_image("PNG", cv2.imencode(".png", bgr)[1].tobytes(), 4, 3),
+        "16FC1": sim_image("16FC1", depth.tobytes(), 4, 3),
+        "32FC1 data_float": sim_image("32FC1", b"", 4, 3, data_float=depth.astype(np.float32).tolist()),
+        "GRAY8": sim_image("GRAY8", bytes(range(12)), 4, 3),
+        "empty": sim_image("BGR", b"", 0, 0),
+    }
+    for name, sim in cases.items():
+        msg = image(sim, CTX)
+        plain = Image(
+            header=msg.header,
+            height=msg.height,
+            width=msg.width,
+            encoding=msg.encoding,
+            is_bigendian=msg.is_bigendian,
+            step=msg.step,
+            data=bytes(msg.data),
+        )
+        assert wire(msg) == wire(plain), name
+        assert Image().deserialize(wire(msg)).data == bytes(msg.data), name
+
+
+def test_pixels_in_a_received_frame_are_published_without_a_copy():
+    frame = b"\x00" * 10 + bytes(range(48)) + b"\x00" * 10
+    view = memoryview(frame)[10:58]
+    msg = image(sim_image("BGR", view, 4, 4), CTX)
+    assert msg.data.obj is frame  # still the frame's own memory
+    assert wire(msg).endswith(len(view).to_bytes(4, "little") + bytes(range(48)))
