@@ -4,7 +4,8 @@ Cameras and lidars still run on the server's own schedule, and every message is 
 `simserver.messages` and sent by the server's `TopicHub` (protocol-faithful frames, the same sockets and
 services); only the ray casting is replaced by a cache. A camera's first frame of each size is rendered
 at an eighth of the resolution and scaled up by pixel repetition (ray casting 1080p would take seconds),
-a lidar's first scan is cast once and then repeated.
+a lidar's first scan is cast once and then repeated. Cameras render in the server's own process
+(`--render-in-process`): a render worker, a child process, would not have the cache.
 
     python -m airsim_mapper.bench.replay_server --topicsport P --servicesport Q
 """
@@ -46,11 +47,23 @@ def _upscale(image: camera.RenderedImage, factor: int, width: int, height: int) 
 def cached_render(real_render: Any) -> Any:
     cache: dict[tuple, dict[int, camera.RenderedImage]] = {}
 
-    def render(world: Any, position: Any, orientation: Any, width: int, height: int, fov: float, types: Any):
-        key = (width, height, float(fov), tuple(types))
+    def render(
+        world: Any,
+        position: Any,
+        orientation: Any,
+        width: int,
+        height: int,
+        fov: float,
+        types: Any,
+        *more: Any,
+    ):
+        """`camera.render`'s signature; `more` (depth scale, range) is part of the cache key."""
+        key = (width, height, float(fov), tuple(types), *more)
         if key not in cache:
             factor = _reduction(width, height)
-            small = real_render(world, position, orientation, width // factor, height // factor, fov, types)
+            small = real_render(
+                world, position, orientation, width // factor, height // factor, fov, types, *more
+            )
             cache[key] = {t: _upscale(img, factor, width, height) for t, img in small.items()}
         return cache[key]
 
@@ -75,8 +88,10 @@ def install_replay() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The headless server with the cache installed; it renders in its own process, where the cache is."""
     install_replay()
-    return server_main(argv)
+    args = list(sys.argv[1:] if argv is None else argv)
+    return server_main([*args, "--render-in-process"] if "--render-in-process" not in args else args)
 
 
 if __name__ == "__main__":
