@@ -137,17 +137,30 @@ def radar_block_azimuths(yaw_enu: float) -> np.ndarray:
     msg.pose.position.z = 4.0
     msg.pose.orientation.w, msg.pose.orientation.z = math.cos(yaw_enu / 2), math.sin(yaw_enu / 2)
 
+    turned_at = []
+
     def turned() -> bool:
         pub.publish(msg)
-        pose = receive(f"{ROBOT}/actual_pose", PoseStamped).pose.orientation
+        actual = receive(f"{ROBOT}/actual_pose", PoseStamped)
+        pose = actual.pose.orientation
+        turned_at[:] = [actual.header.stamp]
         return abs(pose.z * msg.pose.orientation.z + pose.w * msg.pose.orientation.w) > 0.9999
 
     try:
         wait_until(turned, 10, interval=0.2, what="the turn")
     finally:
         pub.unregister()
-    rospy.sleep(0.3)  # a scan taken after the turn
-    scan = receive(f"{ROBOT}/radar1/radar_detections", RadarScan)
+    # A new subscriber first gets the simulator's cached last scan, which may predate the turn (the radar
+    # bridge is lazy and left the simulator with the previous call's subscriber): wait for a newer one.
+    scans: list = []
+    radar = rospy.Subscriber(f"{ROBOT}/radar1/radar_detections", RadarScan, scans.append)
+    try:
+        wait_until(
+            lambda: any(s.header.stamp > turned_at[0] for s in scans), 20, what="a scan after the turn"
+        )
+    finally:
+        radar.unregister()
+    scan = next(s for s in scans if s.header.stamp > turned_at[0])
     assert scan.header.frame_id == "Drone1/radar1"
     table = np.array([(r.range, r.azimuth, r.elevation) for r in scan.returns])
     block = np.abs(table[:, 0] - 28.0) < 0.6  # the block's nearest point: (28, 0) NED, 28 m away
