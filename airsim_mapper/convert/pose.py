@@ -63,19 +63,25 @@ def camera_mount(ctx: ConvertContext) -> tuple[np.ndarray, np.ndarray]:
     if override is not None:
         position, q = override
         return np.asarray(position, dtype=float), np.asarray(q, dtype=float)
-    origin = ctx.source.get("camera_origin")
     try:
-        try:
-            return parsed_origin(tuple(origin.items())) if origin else parse_origin(origin)
-        except (TypeError, AttributeError):  # not a map of strings: parse it as it is, for the error
-            return parse_origin(origin)
+        return mount_origin(ctx.source.get("camera_origin"))
     except (OriginError, TypeError, AttributeError) as exc:
         raise ConversionError(f"camera_origin: {exc}") from exc
 
 
+def mount_origin(origin: Any) -> tuple[np.ndarray, np.ndarray]:
+    """`parse_origin`, cached for a map of hashable values; anything else parsed as it is, for its error."""
+    try:
+        items = tuple(origin.items())
+        hash(items)
+    except (AttributeError, TypeError):
+        return parse_origin(origin)
+    return parsed_origin(items)
+
+
 @functools.lru_cache(maxsize=256)
 def parsed_origin(items: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """`parse_origin` of an origin's items, parsed once per distinct origin (TypeError if unhashable)."""
+    """`parse_origin` of an origin's items, parsed once per distinct origin."""
     position, q = parse_origin(dict(items))
     position.flags.writeable = q.flags.writeable = False  # shared between calls
     return position, q

@@ -55,9 +55,14 @@ def field(msg: Any, key: str, where: str = "message") -> Any:
     return msg[key]
 
 
+def _plain_float(value: Any, finite: bool) -> bool:
+    """The common case, checked quickly: a Python float (finite unless told otherwise)."""
+    return type(value) is float and (not finite or math.isfinite(value))
+
+
 def number(value: Any, where: str, finite: bool = True) -> float:
     """A real number (int or float, not bool); finite unless told otherwise."""
-    if type(value) is float and (not finite or math.isfinite(value)):  # the common case, quickly
+    if _plain_float(value, finite):
         return value
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ConversionError(f"{where} must be a number, got {value!r}")
@@ -75,7 +80,7 @@ def integer(value: Any, where: str) -> int:
 
 def number_field(msg: Any, key: str, where: str = "message", finite: bool = True) -> float:
     value = field(msg, key, where)
-    if type(value) is float and (not finite or math.isfinite(value)):  # the common case, quickly
+    if _plain_float(value, finite):  # before building the field's name for an error
         return value
     return number(value, f"{where}.{key}" if where != "message" else key, finite)
 

@@ -50,14 +50,13 @@ class PromptQueuedConnection(QueuedConnection):
                 raise error
             if not self._queue and not self._busy and self._partial is None:
                 sent = self._send_now(data)
-                if sent == len(data):
-                    self._connection.stat_bytes += sent
-                    self._connection.stat_num_msg += 1
-                    return True
                 if sent:
-                    self._partial = memoryview(data)[sent:]
                     self._connection.stat_bytes += sent
-                    self._cond_data_available.notify()
+                    if sent == len(data):
+                        self._connection.stat_num_msg += 1
+                    else:  # the writer thread sends the rest (and counts the message)
+                        self._partial = memoryview(data)[sent:]
+                        self._cond_data_available.notify()
                     return True
             if self._queue_size > 0 and len(self._queue) == self._queue_size:
                 del self._queue[0]
