@@ -56,6 +56,15 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "robot actual_pose composed with the camera mount (and any camera pose command) -> camera pose",
         ),
         _c(
+            "sensor_pose",
+            SIM_TO_ROS,
+            ["geometry_msgs/PoseStamped"],
+            "topic",
+            "pose",
+            "sensor_pose",
+            "robot actual_pose composed with a sensor's config origin (lidar, radar, distance) -> its pose",
+        ),
+        _c(
             "camera_optical_pose",
             SIM_TO_ROS,
             ["geometry_msgs/PoseStamped"],

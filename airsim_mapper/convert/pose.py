@@ -63,10 +63,15 @@ def camera_mount(ctx: ConvertContext) -> tuple[np.ndarray, np.ndarray]:
     if override is not None:
         position, q = override
         return np.asarray(position, dtype=float), np.asarray(q, dtype=float)
+    return config_mount(ctx, "camera_origin")
+
+
+def config_mount(ctx: ConvertContext, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """The pose relative to the robot (NED/FRD) given by the origin under `key` in the rule's source."""
     try:
-        return mount_origin(ctx.source.get("camera_origin"))
+        return mount_origin(ctx.source.get(key))
     except (OriginError, TypeError, AttributeError) as exc:
-        raise ConversionError(f"camera_origin: {exc}") from exc
+        raise ConversionError(f"{key}: {exc}") from exc
 
 
 def mount_origin(origin: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -92,6 +97,19 @@ def camera_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     """The ROBOT's sim PoseStamped composed with the camera mount -> the camera's world PoseStamped."""
     robot_position, robot_q = sim_fields.pose(msg)
     mount_position, mount_q = camera_mount(ctx)
+    position, q = compose(robot_position, robot_q, mount_position, mount_q)
+    return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
+
+
+@sim_fields.converter("sensor_pose")
+def sensor_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
+    """The ROBOT's sim PoseStamped composed with the sensor's config origin -> the sensor's world PoseStamped.
+
+    For a lidar, radar or distance sensor, whose mount is fixed: its frame is then in tf from the robot's
+    pose, whether or not anyone subscribes to its data.
+    """
+    robot_position, robot_q = sim_fields.pose(msg)
+    mount_position, mount_q = config_mount(ctx, "origin")
     position, q = compose(robot_position, robot_q, mount_position, mount_q)
     return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
 

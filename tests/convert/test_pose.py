@@ -18,8 +18,9 @@ from airsim_mapper.convert.pose import (
     camera_pose_key,
     camera_pose_override,
     pose_stamped,
+    sensor_pose,
 )
-from airsim_mapper.geometry import quat_from_rpy, rpy_from_quat
+from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rpy_from_quat
 
 H = math.sqrt(0.5)
 
@@ -160,3 +161,36 @@ def test_a_camera_pose_command_feeds_the_published_camera_pose_in_both_conventio
         out = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), ctx)
         expected = [0.5, 0.25, 0.1] if convention == "ned" else [-0.25, 0.5, 0.1]
         assert xyz(out) == pytest.approx(expected)
+
+
+def sensor_ctx(convention="ned", origin=None):
+    return ConvertContext(frame_id="map", convention=convention, source={"id": "lidar1", "origin": origin})
+
+
+def test_sensor_pose_moves_the_robot_pose_by_the_sensors_config_origin():
+    robot_yawed_east = quat_from_rpy(0.0, 0.0, math.pi / 2)
+    origin = {"xyz": "0.3 0 -0.2", "rpy-deg": "0 -90 0"}  # 0.3 m ahead, 0.2 m up, looking down
+    msg = sensor_pose(
+        sim_pose(position=(10.0, 0.0, -5.0), q=tuple(robot_yawed_east)), sensor_ctx(origin=origin)
+    )
+    assert xyz(msg) == pytest.approx([10.0, 0.3, -5.2])  # ahead is east
+    beam = quat_to_matrix(np.array(wxyz(msg)))[:, 0]
+    assert beam == pytest.approx([0.0, 0.0, 1.0], abs=1e-9)  # the sensor's x axis points down (NED)
+    assert msg.header.stamp == rospy.Time(2, 500_000_000)
+
+
+def test_sensor_pose_without_an_origin_is_the_robot_pose():
+    msg = sensor_pose(sim_pose(q=(H, 0.0, 0.0, H)), sensor_ctx())
+    assert xyz(msg) == [1.0, 2.0, -3.0]
+    assert wxyz(msg) == pytest.approx([H, 0.0, 0.0, H])
+
+
+def test_sensor_pose_in_enu_is_the_composed_pose_in_enu_flu(roundtrip):
+    msg = sensor_pose(sim_pose(position=(0.0, 0.0, -5.0)), sensor_ctx("enu", {"xyz": "1 0 0"}))
+    assert xyz(msg) == pytest.approx([0.0, 1.0, 5.0])  # 1 m north is y = 1 in ENU
+    assert roundtrip(msg) == msg
+
+
+def test_sensor_pose_with_a_malformed_origin_names_the_key():
+    with pytest.raises(ConversionError, match=r"sensor_pose: origin: origin 'rpy' must hold three"):
+        sensor_pose(sim_pose(), sensor_ctx(origin={"rpy": "0 1"}))

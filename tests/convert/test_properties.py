@@ -25,6 +25,7 @@ VALID: dict[str, dict[str, Any]] = {
     "pose": {"time_stamp": 1, **POSE},
     "camera_pose": {"time_stamp": 1, **POSE},
     "camera_optical_pose": {"time_stamp": 1, **POSE},
+    "sensor_pose": {"time_stamp": 1, **POSE},
     "odometry": {"time_stamp": 1, **POSE},
     "collision": {"time_stamp": 1, "object_name": "x", "impact_point": {"x": 1.0, "y": 2.0, "z": 3.0}},
     "image": {"time_stamp": 1, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)},

@@ -19,7 +19,7 @@ def test_a_valid_mapping_without_a_scene_exits_0_and_lists_its_rules(capsys):
     assert main([str(DEFAULT)]) == 0
     out = capsys.readouterr().out
     assert "/airsim_node/<robot_name>/<camera_name>/<image_type>/image" in out
-    assert out.rstrip().endswith("valid, 39 rules")
+    assert out.rstrip().endswith("valid, 42 rules")
 
 
 def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene():
@@ -40,7 +40,7 @@ def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene(
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[0].split() == ["DIRECTION", "SIMULATOR", "ROS", "TYPE", "FRAME"]
-    assert lines[-1] == "60 bridges"
+    assert lines[-1] == "62 bridges"
     pose = next(line for line in lines if " /airsim_node/Drone1/actual_pose " in line)
     assert pose.split() == [
         "sim_to_ros",
@@ -67,7 +67,12 @@ def test_json_format_prints_one_array_of_bridges_with_the_documented_keys(capsys
         None,
         None,
     )
-    lidar = next(row for row in rows if row["rule"] == "lidar")
+    lidar = next(row for row in rows if row["rule"] == "lidar_tf")
+    assert (lidar["sim"], lidar["converter"], lidar["ros"]) == (
+        "/Sim/SceneLidarDrone/robots/Drone1/actual_pose",
+        "sensor_pose",
+        None,
+    )
     assert lidar["tf"] == {"parent": "map", "child": "airsim_node/Drone1/lidar1"}
     assert {row["direction"] for row in rows} == {"sim_to_ros", "ros_to_sim"}
 
@@ -97,7 +102,7 @@ def test_a_missing_scene_file_exits_2_and_an_invalid_scene_exits_1(tmp_path, cap
 
 def test_load_and_expand_returns_the_mapping_scene_and_bridges():
     mapping, scene, bridges = load_and_expand(DEFAULT, "scene_basic_drone.jsonc", SIM_CONFIG, "n1", "")
-    assert (len(mapping.rules), scene.name, bridges[0].name) == (39, "SceneBasicDrone", "load_scene[n1]")
+    assert (len(mapping.rules), scene.name, bridges[0].name) == (42, "SceneBasicDrone", "load_scene[n1]")
     table = format_table(bridges)
     assert len(table.splitlines()) == len(bridges) + 1
 

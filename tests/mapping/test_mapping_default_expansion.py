@@ -173,11 +173,16 @@ def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sens
     info = by_ros["/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info"]
     assert info.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/disparity_normalized_camera"
     lidar = by_ros["/airsim_node/Drone1/lidar1/lidar"]
-    assert (lidar.ros_type, lidar.frame_id, lidar.tf.child) == (
+    assert (lidar.ros_type, lidar.frame_id, lidar.tf) == (
         "sensor_msgs/PointCloud2",
         "airsim_node/Drone1/lidar1",
-        "airsim_node/Drone1/lidar1",
+        None,
     )
+    # sensor frames come from the robot's pose and the sensor's mount, not with the (lazy) data
+    frames = {b.tf.child: (b.sim, b.converter) for b in bridges if b.name.split("[")[0].endswith("_tf")}
+    pose = ("/Sim/SceneDroneSensors/robots/Drone1/actual_pose", "sensor_pose")
+    for sensor in ("lidar1", "DistanceSensor"):
+        assert frames[f"airsim_node/Drone1/{sensor}"] == pose
     switch = by_ros["/airsim_streaming_camera/switch_view"]
     assert (switch.ros_kind, switch.sim) == ("service", "/Sim/SceneDroneSensors/SwitchStreamingView")
     load = by_ros[LOAD_SCENE]
@@ -195,11 +200,18 @@ def test_default_mapping_broadcasts_one_camera_frame_per_capture_enabled_image_t
     ]
 
 
-def test_radar_bridges_use_the_radar_frame_and_detections_broadcast_its_tf(default_mapping):
+def test_radar_bridges_use_the_radar_frame_and_its_tf_comes_from_the_towers_pose(default_mapping):
     bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_radar_tower.jsonc"), "projectairsim")
-    radar = [b for b in bridges if b.variables.get("radar_name") == "radar1"]
+    radar = [b for b in bridges if b.variables.get("radar_name") == "radar1" and b.ros is not None]
     assert [(b.ros_type, b.frame_id) for b in radar] == [
         ("radar_msgs/RadarScan", "airsim_node/RadarTower1/radar1"),
         ("radar_msgs/RadarTracks", "airsim_node/RadarTower1/radar1"),
     ]
-    assert radar[0].tf.child == "airsim_node/RadarTower1/radar1"
+    assert (radar[0].tf, radar[1].tf) == (None, None)
+    (frame,) = [b for b in bridges if b.name == "radar_tf[RadarTower1/radar1]"]
+    assert (frame.sim, frame.converter, frame.tf.child, frame.options.lazy) == (
+        "/Sim/SceneRadarDrone/robots/RadarTower1/actual_pose",
+        "sensor_pose",
+        "airsim_node/RadarTower1/radar1",
+        False,
+    )

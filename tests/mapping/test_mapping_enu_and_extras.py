@@ -154,7 +154,12 @@ def test_default_mapping_publishes_every_instrument_with_its_type_and_frame(defa
         ),
     }
     assert {name: (ros[name].ros_type, ros[name].sim, ros[name].frame_id) for name in expected} == expected
-    assert ros[f"{robot}/DistanceSensor/distance"].tf.child == "airsim_node/Drone1/DistanceSensor"
+    (frame,) = [
+        b
+        for b in expand(default_mapping, scenes["scene_drone_sensors.jsonc"], "projectairsim")
+        if b.rule == "distance_tf"
+    ]
+    assert (frame.tf.child, frame.converter) == ("airsim_node/Drone1/DistanceSensor", "sensor_pose")
 
 
 def test_default_mapping_maps_each_control_service_to_its_simulator_method(default_mapping, scenes):
