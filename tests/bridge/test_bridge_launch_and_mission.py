@@ -84,14 +84,18 @@ def test_hello_ros_flies_to_the_ball_while_the_bridge_publishes(rig_factory):
     wait_topic("/airsim_node/Drone1/actual_pose", mission)
     track: list[np.ndarray] = []
     images: list[float] = []
-    rospy.Subscriber(
-        "/airsim_node/Drone1/actual_pose",
-        PoseStamped,
-        lambda m: track.append(np.array([m.pose.position.x, m.pose.position.y, m.pose.position.z])),
-    )
-    rospy.Subscriber(
-        "/airsim_node/Drone1/DownCamera/scene_camera/image", Image, lambda m: images.append(time.monotonic())
-    )
+    subscribers = [
+        rospy.Subscriber(
+            "/airsim_node/Drone1/actual_pose",
+            PoseStamped,
+            lambda m: track.append(np.array([m.pose.position.x, m.pose.position.y, m.pose.position.z])),
+        ),
+        rospy.Subscriber(
+            "/airsim_node/Drone1/DownCamera/scene_camera/image",
+            Image,
+            lambda m: images.append(time.monotonic()),
+        ),
+    ]
     ball = np.array([20.0, 20.0, -3.0])  # the default world's orange ball
 
     def near_ball() -> bool:
@@ -99,7 +103,11 @@ def test_hello_ros_flies_to_the_ball_while_the_bridge_publishes(rig_factory):
             raise AssertionError(mission.output())
         return bool(track) and np.linalg.norm(track[-1] - ball) < 6.0
 
-    wait_until(near_ball, 45, interval=0.2, what="the drone to reach the ball")
+    try:
+        wait_until(near_ball, 45, interval=0.2, what="the drone to reach the ball")
+    finally:  # this process is one ROS node for the whole session: leave no subscriber behind
+        for subscriber in subscribers:
+            subscriber.unregister()
     assert len(images) > 10  # the bridge kept publishing during the mission
     assert mission.alive()
     mission.stop()
