@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver import messages
+from airsim_mapper.simserver import instruments, messages
 from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import (
@@ -148,8 +148,16 @@ class RobotRuntime:
         self.hub.publish(self.pose_path, messages.pose_stamped(now_ns, kin.position, kin.orientation))
 
     def step_instruments(self, now_ns: int) -> None:
+        """Step every instrument on one snapshot of the body, taken when the first one is due."""
+        taken: list[instruments.Kinematics] = []
+
+        def state() -> instruments.Kinematics:
+            if not taken:
+                taken.append(self.instruments[0].state())
+            return taken[0]
+
         for stream in self.instruments:
-            stream.step(now_ns)
+            stream.step(now_ns, state)
         if self.spec.multirotor:
             self.rotors.step(now_ns)
 

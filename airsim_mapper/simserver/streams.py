@@ -302,8 +302,13 @@ class InstrumentStream:
         self.schedule = Schedule(int(1e9 / rate))
         self.idle = Schedule(IDLE_REFRESH_NS)
 
-    def message(self, now_ns: int) -> dict[str, Any]:
-        kin = instruments.Kinematics(**vars(self.body.snapshot()))
+    def state(self) -> instruments.Kinematics:
+        """The body's ground truth now, as the instrument models take it."""
+        return instruments.Kinematics(**vars(self.body.snapshot()))
+
+    def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
+        """This instrument's message at `now_ns`, from `kin` (read from the body if not given)."""
+        kin = kin if kin is not None else self.state()
         cfg = dict(self.sensor.config)
         kind = self.sensor.type
         if kind == "imu":
@@ -320,10 +325,11 @@ class InstrumentStream:
             return instruments.battery_message(now_ns, cfg, max(0.0, (now_ns - self.start_ns) / 1e9))
         return instruments.airspeed_message(kin, cfg, now_ns)
 
-    def step(self, now_ns: int) -> None:
+    def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
+        """Publish if due; `state` gives the tick's ground truth, shared by a robot's instruments."""
         subscribed = self.hub.is_subscribed(self.path)
         if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
-            self.hub.publish(self.path, self.message(now_ns))
+            self.hub.publish(self.path, self.message(now_ns, state() if state is not None else None))
 
 
 class RotorStream:

@@ -185,3 +185,46 @@ def test_invalid_instrument_configs_are_refused_naming_sensor_and_key(call, mess
     with pytest.raises(InstrumentError) as caught:
         call()
     assert str(caught.value) == message
+
+
+class RecordingHub:
+    """The part of TopicHub an instrument stream uses: everything is subscribed, publishes are kept."""
+
+    def __init__(self) -> None:
+        self.published: list[tuple[str, dict]] = []
+
+    def is_subscribed(self, _path: str) -> bool:
+        return True
+
+    def publish(self, path: str, message: dict) -> None:
+        self.published.append((path, message))
+
+
+def test_a_robots_instruments_share_one_snapshot_of_the_body_per_tick(monkeypatch):
+    from types import SimpleNamespace
+
+    from airsim_mapper.simserver.motion import Body
+    from airsim_mapper.simserver.robots import RobotRuntime
+    from airsim_mapper.simserver.scene import SensorSpec
+    from airsim_mapper.simserver.streams import InstrumentStream
+
+    body = Body(np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, 0.0, 0.0), lambda _p: 0.0)
+    snapshots = []
+    original = body.snapshot
+    monkeypatch.setattr(body, "snapshot", lambda: snapshots.append(1) or original())
+    hub = RecordingHub()
+    world = load_world(None)
+    robot = SimpleNamespace(
+        spec=SimpleNamespace(multirotor=False),
+        instruments=[
+            InstrumentStream(SensorSpec(k, k, {"update-frequency": hz}), "/r", body, world, hub, HOME, 0)
+            for k, hz in (("imu", 100), ("gps", 10), ("barometer", 50), ("magnetometer", 50))
+        ],
+    )
+    RobotRuntime.step_instruments(robot, 0)  # all due: four messages from one snapshot
+    assert (len(hub.published), len(snapshots)) == (4, 1)
+    RobotRuntime.step_instruments(robot, 10_000_000)  # 10 ms on: only the IMU is due
+    assert [path for path, _ in hub.published[4:]] == ["/r/imu_kinematics"]
+    assert len(snapshots) == 2
+    RobotRuntime.step_instruments(robot, 15_000_000)  # nothing due: the body is not read
+    assert (len(hub.published), len(snapshots)) == (5, 2)
