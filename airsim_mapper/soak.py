@@ -30,7 +30,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from airsim_mapper import hosttune
-from airsim_mapper.localproc import free_port, start_group, stop_group, wait_until
+from airsim_mapper.localproc import (
+    CpuMark,
+    command_name,
+    cpu_mark,
+    cpu_shares,
+    descendants,
+    free_port,
+    start_group,
+    stop_group,
+    wait_until,
+)
 from airsim_mapper.tuning import SWITCH_INTERVAL_S
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -80,6 +90,7 @@ class Rig:
     def __init__(self, workdir: Path) -> None:
         self.workdir = workdir
         self.procs: list[subprocess.Popen] = []
+        self.named: dict[str, subprocess.Popen] = {}
         master_port = free_port()
         self.env = {
             **os.environ,
@@ -97,7 +108,18 @@ class Rig:
     def start(self, name: str, argv: list[str]) -> subprocess.Popen:
         proc = start_group(argv, self.workdir / f"{name}.log", self.env, ROOT)
         self.procs.append(proc)
+        self.named[name] = proc
         return proc
+
+    def cpu_marks(self) -> list[CpuMark]:
+        """CPU marks of the rig's processes, their children (render worker, roscore's) and this monitor."""
+        pids = {"monitor": os.getpid()}
+        for name, proc in self.named.items():
+            pids[name] = proc.pid
+            for child in sorted(descendants({proc.pid})):
+                label = f"{name}/{command_name(child)}"
+                pids[label if label not in pids else f"{label} {child}"] = child
+        return [mark for name, pid in pids.items() if (mark := cpu_mark(name, pid)) is not None]
 
     def stop_all(self) -> None:
         for proc in reversed(self.procs):
@@ -293,6 +315,8 @@ def run(seconds: float, workdir: Path) -> int:
         listener.attach(topics)
         print(f"soak: {seconds:.0f} s, warm-up {warmup:.0f} s, {len(topics)} topics subscribed", flush=True)
         t0 = time.monotonic()
+        cpu_before: list[CpuMark] = []
+        cpu_t0 = t0
         samples: list[Sample] = []
         counts_at_warmup: dict[str, int] = {}
         while time.monotonic() - t0 < seconds:
@@ -301,12 +325,14 @@ def run(seconds: float, workdir: Path) -> int:
             s = sample(hello.pid, t0)
             samples.append(s)
             if not counts_at_warmup and s.t >= warmup:
+                cpu_before, cpu_t0 = rig.cpu_marks(), time.monotonic()
                 counts_at_warmup = listener.snapshot()[0]
                 listener.collect_peaks = True
                 own_gc.take_peak_ms()
             print(f"  t={s.t:6.0f} s  rss={s.rss_mb:7.1f} MB  threads={s.threads}", flush=True)
             time.sleep(SAMPLE_PERIOD_S)
         counts, pose_times, pose_stamps = listener.snapshot()
+        nice0_cores = print_cpu(cpu_shares(cpu_before, rig.cpu_marks(), time.monotonic() - cpu_t0))
         pose_times, pose_stamps = since(t0 + warmup, pose_times, pose_stamps)
         stop_group(probe, 30.0)  # on SIGINT the probe writes its file
         probe_times, probe_stamps = since(t0 + warmup, *read_probe(probe_file))
@@ -330,7 +356,19 @@ def run(seconds: float, workdir: Path) -> int:
     speeds = [speed_before, host_speed_ms()]
     print(f"host speed: a fixed Python loop took {speeds[0]} ms before the run, {speeds[1]} ms after")
     host = {"ksoftirqd_nice": hosttune.SOFTIRQ_NICE if tuned else None, "host_speed_ms": speeds}
+    host.update(cpu_nice0_cores=nice0_cores, cpus=os.cpu_count())
     return report(*measured, host)
+
+
+def print_cpu(shares: list[tuple[str, float, int]]) -> float:
+    """Print each process's CPU after warm-up; return the cores used at nice 0 or below (what competes)."""
+    print(f"CPU after warm-up (% of one core, nice value) on {os.cpu_count()} CPUs:")
+    for name, percent, nice in shares:
+        if percent >= 0.5:
+            print(f"  {percent:6.1f}  nice {nice:3d}  {name}")
+    nice0 = sum(percent for _, percent, nice in shares if nice <= 0) / 100.0
+    print(f"  {nice0:6.2f} cores at nice 0 or below, in all")
+    return round(nice0, 2)
 
 
 def report(

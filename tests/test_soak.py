@@ -50,6 +50,10 @@ def test_a_short_soak_runs_the_rig_and_reports_everything(tmp_path):
     assert summary["ksoftirqd_nice"] == (-10 if tuned else None)
     assert ("at nice -10 for the run, then back to ksoftirqd/0" in out) == tuned
     assert all(0 < ms < 10_000 for ms in summary["host_speed_ms"])
+    # CPU per process after warm-up: the bridge (in hello_ros), the server and its render worker all work
+    cpu = out.split("CPU after warm-up", 1)[1].split(" in all")[0]
+    assert all(name in cpu for name in ("hello_ros", "simserver", "render_worker", "monitor"))
+    assert 0.1 < summary["cpu_nice0_cores"] <= summary["cpus"]
     assert softirq_threads() == host_before  # put back as it was
 
 
