@@ -110,6 +110,10 @@ class RenderWorker:
             LOG.warning("render worker %d exited (code %s); starting a new one", self._proc.pid, code)
             self._discard()
         ours, theirs = socket.socketpair()
+        # Blocking on both ends whatever socket.setdefaulttimeout says (rospy sets 60 s): a timeout makes the
+        # descriptors non-blocking, and Connection's plain reads then fail with EAGAIN between requests.
+        ours.setblocking(True)
+        theirs.setblocking(True)
         try:
             self._proc = subprocess.Popen(
                 _command(theirs.fileno(), self.nice),
@@ -180,7 +184,9 @@ def main(argv: Sequence[str]) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
     limit_blas_threads(1)
-    serve(Connection(int(argv[0])), int(argv[1]))
+    fd = int(argv[0])
+    os.set_blocking(fd, True)
+    serve(Connection(fd), int(argv[1]))
     return 0
 
 

@@ -50,6 +50,25 @@ def test_the_worker_renders_every_type_byte_for_byte_like_an_in_process_render(w
         assert got[kind] == want[kind], f"image type {kind} differs"
 
 
+def test_a_default_socket_timeout_does_not_make_the_worker_fail_between_requests():
+    import socket
+
+    # rospy sets a 60 s default timeout in every node; sockets made then are non-blocking underneath
+    previous = socket.getdefaulttimeout()
+    socket.setdefaulttimeout(60.0)
+    rw = RenderWorker(load_world())
+    try:
+        rw.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+        pid = rw.pid
+        time.sleep(0.3)  # the child waits for its next request: a non-blocking read would fail here
+        assert alive(pid)
+        rw.render(POSITION, ORIENTATION, 320, 240, 90.0, list(camera.IMAGE_TYPES))  # large answers too
+        assert (rw.pid, rw.restarts) == (pid, 0)
+    finally:
+        socket.setdefaulttimeout(previous)
+        rw.close()
+
+
 def test_the_worker_starts_on_the_first_render_at_a_lower_priority_and_stops_on_close(worker):
     assert worker.pid is None
     worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
