@@ -89,8 +89,7 @@ class Rig:
 
     def __init__(self, workdir: Path) -> None:
         self.workdir = workdir
-        self.procs: list[subprocess.Popen] = []
-        self.named: dict[str, subprocess.Popen] = {}
+        self.named: dict[str, subprocess.Popen] = {}  # in start order
         master_port = free_port()
         self.env = {
             **os.environ,
@@ -107,7 +106,6 @@ class Rig:
 
     def start(self, name: str, argv: list[str]) -> subprocess.Popen:
         proc = start_group(argv, self.workdir / f"{name}.log", self.env, ROOT)
-        self.procs.append(proc)
         self.named[name] = proc
         return proc
 
@@ -122,7 +120,7 @@ class Rig:
         return [mark for name, pid in pids.items() if (mark := cpu_mark(name, pid)) is not None]
 
     def stop_all(self) -> None:
-        for proc in reversed(self.procs):
+        for proc in reversed(list(self.named.values())):
             stop_group(proc, 15.0)
 
 

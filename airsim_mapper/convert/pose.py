@@ -92,12 +92,16 @@ def parsed_origin(items: tuple) -> tuple[np.ndarray, np.ndarray]:
     return position, q
 
 
+def mounted(msg: Mapping[str, Any], mount: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """World NED/FRD (position, q) of a mount on the robot whose sim PoseStamped is `msg`."""
+    robot_position, robot_q = sim_fields.pose(msg)
+    return compose(robot_position, robot_q, *mount)
+
+
 @sim_fields.converter("camera_pose")
 def camera_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     """The ROBOT's sim PoseStamped composed with the camera mount -> the camera's world PoseStamped."""
-    robot_position, robot_q = sim_fields.pose(msg)
-    mount_position, mount_q = camera_mount(ctx)
-    position, q = compose(robot_position, robot_q, mount_position, mount_q)
+    position, q = mounted(msg, camera_mount(ctx))
     return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
 
 
@@ -108,18 +112,14 @@ def sensor_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     For a lidar, radar or distance sensor, whose mount is fixed: its frame is then in tf from the robot's
     pose, whether or not anyone subscribes to its data.
     """
-    robot_position, robot_q = sim_fields.pose(msg)
-    mount_position, mount_q = config_mount(ctx, "origin")
-    position, q = compose(robot_position, robot_q, mount_position, mount_q)
+    position, q = mounted(msg, config_mount(ctx, "origin"))
     return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
 
 
 @sim_fields.converter("camera_optical_pose")
 def camera_optical_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     """As camera_pose, then turned into the camera's optical frame (z forward, x right, y down)."""
-    robot_position, robot_q = sim_fields.pose(msg)
-    mount_position, mount_q = camera_mount(ctx)
-    position, q = compose(robot_position, robot_q, mount_position, mount_q)
+    position, q = mounted(msg, camera_mount(ctx))
     if ctx.enu:
         position, q = frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q)
     return PoseStamped(

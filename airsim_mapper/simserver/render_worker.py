@@ -184,9 +184,7 @@ def main(argv: Sequence[str]) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
     limit_blas_threads(1)
-    fd = int(argv[0])
-    os.set_blocking(fd, True)
-    serve(Connection(fd), int(argv[1]))
+    serve(Connection(int(argv[0])), int(argv[1]))
     return 0
 
 

@@ -7,13 +7,14 @@ the handler starts the command and waits until it ends, so the reply comes when 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver import instruments, messages
+from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import (
@@ -38,6 +39,7 @@ from airsim_mapper.simserver.streams import (
     RadarStream,
     Render,
     RotorStream,
+    ground_truth,
 )
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
@@ -149,13 +151,7 @@ class RobotRuntime:
 
     def step_instruments(self, now_ns: int) -> None:
         """Step every instrument on one snapshot of the body, taken when the first one is due."""
-        taken: list[instruments.Kinematics] = []
-
-        def state() -> instruments.Kinematics:
-            if not taken:
-                taken.append(self.instruments[0].state())
-            return taken[0]
-
+        state = functools.cache(lambda: ground_truth(self.body))
         for stream in self.instruments:
             stream.step(now_ns, state)
         if self.spec.multirotor:

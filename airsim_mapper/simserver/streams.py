@@ -272,6 +272,11 @@ class RadarStream:
         return worked
 
 
+def ground_truth(body: Body) -> instruments.Kinematics:
+    """The body's state now, as the instrument models take it."""
+    return instruments.Kinematics(**vars(body.snapshot()))
+
+
 class InstrumentStream:
     """IMU, GPS, barometer, magnetometer, distance sensor, battery or airspeed of one robot."""
 
@@ -302,13 +307,9 @@ class InstrumentStream:
         self.schedule = Schedule(int(1e9 / rate))
         self.idle = Schedule(IDLE_REFRESH_NS)
 
-    def state(self) -> instruments.Kinematics:
-        """The body's ground truth now, as the instrument models take it."""
-        return instruments.Kinematics(**vars(self.body.snapshot()))
-
     def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
         """This instrument's message at `now_ns`, from `kin` (read from the body if not given)."""
-        kin = kin if kin is not None else self.state()
+        kin = kin if kin is not None else ground_truth(self.body)
         cfg = dict(self.sensor.config)
         kind = self.sensor.type
         if kind == "imu":

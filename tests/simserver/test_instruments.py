@@ -215,6 +215,7 @@ def test_a_robots_instruments_share_one_snapshot_of_the_body_per_tick(monkeypatc
     hub = RecordingHub()
     world = load_world(None)
     robot = SimpleNamespace(
+        body=body,
         spec=SimpleNamespace(multirotor=False),
         instruments=[
             InstrumentStream(SensorSpec(k, k, {"update-frequency": hz}), "/r", body, world, hub, HOME, 0)
