@@ -50,6 +50,8 @@ SAMPLE_PERIOD_S = 5.0
 RSS_LIMIT_MB = 20.0
 THREAD_SLACK = 2
 POSE_GAP_LIMIT_S = 0.100
+WAKE_PERIOD_S = 0.005  # the wake probe's sleep
+WAKE_LATE_S = 0.005  # a wake-up later than this is written down
 
 
 class SoakError(RuntimeError):
@@ -192,13 +194,14 @@ def node_topics(node: str) -> list[str]:
     return sorted(topic for topic, nodes in state[0] if f"/{node}" in nodes and topic not in ("/rosout",))
 
 
-def explain_gaps(times: list[float], stamps: list[float], worst: int = 5) -> None:
+def explain_gaps(times: list[float], stamps: list[float], wakes: Wakes | None = None, worst: int = 5) -> None:
     """Print the largest receive gaps with the sim-time step across them and the lateness after them.
 
     The headless server's steppable clock runs at wall speed, so `receive time - stamp` is a constant plus
     the delivery delay; its minimum over the run is the floor. A gap followed by a late message (lateness
     close to the gap) was a delay on the way; a gap with a matching stamp step and no lateness means no
-    pose was produced or all were dropped.
+    pose was produced or all were dropped. With `wakes`, the last column is the wake probe's largest
+    delay within the gap: close to the gap, the host kept every process waiting, not only the bridge.
     """
     import numpy as np
 
@@ -207,9 +210,11 @@ def explain_gaps(times: list[float], stamps: list[float], worst: int = 5) -> Non
     t, st = np.asarray(times), np.asarray(stamps)
     gaps, steps = np.diff(t), np.diff(st)
     late = (t - st) - (t - st).min()
-    print("largest actual_pose gaps after warm-up (receive gap / sim-time step / lateness after, ms):")
+    head = "receive gap / sim-time step / lateness after" + (" / host wake-up delay" if wakes else "")
+    print(f"largest actual_pose gaps after warm-up ({head}, ms):")
     for i in np.argsort(gaps)[::-1][:worst]:
-        print(f"  {gaps[i] * 1000:7.1f} / {steps[i] * 1000:7.1f} / {late[i + 1] * 1000:7.1f}")
+        cells = [gaps[i], steps[i], late[i + 1]] + ([wakes.largest_within(t[i], t[i + 1])] if wakes else [])
+        print("  " + " / ".join(f"{cell * 1000:7.1f}" for cell in cells))
     print(f"gaps over 50 ms: {int((gaps > 0.05).sum())}, over 100 ms: {int((gaps > 0.1).sum())}")
     print(
         f"actual_pose lateness p50 / p99 / max: {np.percentile(late, 50) * 1000:.1f} / "
@@ -308,6 +313,10 @@ def run(seconds: float, workdir: Path) -> int:
         probe_file = workdir / "pose_probe.txt"
         probe_argv = [sys.executable, "-m", "airsim_mapper.soak", "--pose-probe", str(probe_file)]
         probe = rig.start("pose_probe", probe_argv)
+        wake_file = workdir / "wake_probe.txt"
+        waker = rig.start(
+            "wake_probe", [sys.executable, "-m", "airsim_mapper.soak", "--wake-probe", str(wake_file)]
+        )
         listener = Listener()
         topics = node_topics(NODE)
         listener.attach(topics)
@@ -334,10 +343,17 @@ def run(seconds: float, workdir: Path) -> int:
         pose_times, pose_stamps = since(t0 + warmup, pose_times, pose_stamps)
         stop_group(probe, 30.0)  # on SIGINT the probe writes its file
         probe_times, probe_stamps = since(t0 + warmup, *read_probe(probe_file))
+        stop_group(waker, 30.0)
+        wakes = read_wakes(wake_file).since(t0 + warmup)
+        print(f"the wake probe (a process that only sleeps {WAKE_PERIOD_S * 1000:.0f} ms at a time):")
+        print(
+            f"  {wakes.count} wake-ups in all; after warm-up {wakes.over(0.02)} late by over 20 ms, "
+            f"{wakes.over(0.05)} by over 50 ms, the latest by {wakes.largest() * 1000:.1f} ms"
+        )
         print("the pose probe (a process receiving actual_pose only):")
-        explain_gaps(probe_times, probe_stamps)
+        explain_gaps(probe_times, probe_stamps, wakes)
         print("the monitor (its process also receives every other stream):")
-        explain_gaps(pose_times, pose_stamps)
+        explain_gaps(pose_times, pose_stamps, wakes)
         print(f"longest garbage collection after warm-up: bridge {listener.gc_max_ms:.1f} ms, ", end="")
         print(f"this monitor {own_gc.take_peak_ms():.1f} ms (a pause here delays what it measures)")
         print("bridge stream peaks after warm-up (ms): arrival gap / wait for worker / handling")
@@ -346,6 +362,7 @@ def run(seconds: float, workdir: Path) -> int:
             print(f"  {cells[0]:7.1f} / {cells[1]:7.1f} / {cells[2]:7.1f}  {topic}")
         poses = (probe_times, pose_times)
         measured = (samples, warmup, counts, counts_at_warmup, *poses, listener.status, seconds)
+        host_wake_max_ms = round(wakes.largest() * 1000, 1)
     finally:
         rig.stop_all()
         hosttune.restore(tuned)
@@ -354,7 +371,7 @@ def run(seconds: float, workdir: Path) -> int:
     speeds = [speed_before, host_speed_ms()]
     print(f"host speed: a fixed Python loop took {speeds[0]} ms before the run, {speeds[1]} ms after")
     host = {"ksoftirqd_nice": hosttune.SOFTIRQ_NICE if tuned else None, "host_speed_ms": speeds}
-    host.update(cpu_nice0_cores=nice0_cores, cpus=os.cpu_count())
+    host.update(cpu_nice0_cores=nice0_cores, cpus=os.cpu_count(), host_wake_max_ms=host_wake_max_ms)
     return report(*measured, host)
 
 
@@ -458,6 +475,58 @@ def pose_probe(out: Path) -> int:
     return 0
 
 
+@dataclass
+class Wakes:
+    """What the wake probe saw: its wake-ups and the late ones as (time it fell asleep, delay) pairs."""
+
+    count: int = 0
+    late: list[tuple[float, float]] = field(default_factory=list)
+
+    def since(self, start: float) -> Wakes:
+        """The late wake-ups from `start` on (the count stays the run's)."""
+        return Wakes(self.count, [(t, d) for t, d in self.late if t >= start])
+
+    def largest_within(self, start: float, end: float) -> float:
+        """The largest delay of a sleep that began within [start, end) (0 if none was late)."""
+        return max((d for t, d in self.late if start <= t < end), default=0.0)
+
+    def largest(self) -> float:
+        return max((d for _, d in self.late), default=0.0)
+
+    def over(self, limit_s: float) -> int:
+        return sum(1 for _, d in self.late if d > limit_s)
+
+
+def wake_probe(out: Path) -> int:
+    """A process that only sleeps `WAKE_PERIOD_S` at a time; writes each wake-up late by over 5 ms.
+
+    It runs at the bridge's priority in a session of its own, like every process of the rig, and does
+    nothing else: its delays are the host's scheduling delays, the floor under any pose gap.
+    """
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    late: list[str] = []
+    count = 0
+    before = time.monotonic()
+    while not stop.is_set():
+        time.sleep(WAKE_PERIOD_S)
+        now = time.monotonic()
+        if now - before - WAKE_PERIOD_S > WAKE_LATE_S:
+            late.append(f"{before:.6f} {now - before - WAKE_PERIOD_S:.6f}\n")
+        count += 1
+        before = now
+    out.write_text(f"{count}\n" + "".join(late))
+    return 0
+
+
+def read_wakes(path: Path) -> Wakes:
+    lines = path.read_text().splitlines() if path.exists() else []
+    if not lines:
+        return Wakes()
+    rows = [line.split() for line in lines[1:]]
+    return Wakes(int(lines[0]), [(float(r[0]), float(r[1])) for r in rows])
+
+
 def since(start: float, times: list[float], stamps: list[float]) -> tuple[list[float], list[float]]:
     """The (receive time, stamp) pairs received at or after `start`."""
     kept = [(t, st) for t, st in zip(times, stamps) if t >= start]
@@ -472,6 +541,8 @@ def read_probe(path: Path) -> tuple[list[float], list[float]]:
 def main() -> int:
     if len(sys.argv) == 3 and sys.argv[1] == "--pose-probe":
         return pose_probe(Path(sys.argv[2]))
+    if len(sys.argv) == 3 and sys.argv[1] == "--wake-probe":
+        return wake_probe(Path(sys.argv[2]))
     seconds = float(os.environ.get("SOAK_SECONDS", "600"))
     workdir = Path(tempfile.mkdtemp(prefix="airsim-mapper-soak-"))
     # SIGTERM unwinds like Ctrl-C, so the rig is stopped and the host setting restored

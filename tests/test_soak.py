@@ -11,11 +11,12 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 from harness import ROOT
 
 from airsim_mapper.hosttune import softirq_threads
-from airsim_mapper.soak import read_probe, since
+from airsim_mapper.soak import WAKE_LATE_S, Wakes, explain_gaps, read_probe, read_wakes, since
 
 SOAK = [sys.executable, "-m", "airsim_mapper.soak"]
 
@@ -44,8 +45,11 @@ def test_a_short_soak_runs_the_rig_and_reports_everything(tmp_path):
     assert rates["/airsim_node/Drone1/DownCamera/depth_camera/image"] > 2
     assert "the pose probe (a process receiving actual_pose only):" in out
     assert "bridge stream peaks after warm-up" in out
-    leftovers = subprocess.run(["pgrep", "-f", "airsim_mapper.soak --pose-probe"], capture_output=True)
-    assert leftovers.returncode == 1
+    for probe in ("--pose-probe", "--wake-probe"):
+        leftovers = subprocess.run(["pgrep", "-f", f"airsim_mapper.soak {probe}"], capture_output=True)
+        assert leftovers.returncode == 1, probe
+    assert "the wake probe (a process that only sleeps 5 ms at a time):" in out
+    assert 0 <= summary["host_wake_max_ms"] < 10_000
     tuned = os.geteuid() == 0
     assert summary["ksoftirqd_nice"] == (-10 if tuned else None)
     assert ("at nice -10 for the run, then back to ksoftirqd/0" in out) == tuned
@@ -64,6 +68,32 @@ def test_probe_lines_are_read_back_and_cut_at_the_warm_up(tmp_path):
     assert times == [1.0, 2.0, 3.0] and stamps == [10.0, 10.01, 10.02]
     assert since(2.0, times, stamps) == ([2.0, 3.0], [10.01, 10.02])
     assert read_probe(tmp_path / "missing.txt") == ([], [])
+
+
+def test_the_wake_probe_counts_its_wake_ups_and_writes_the_late_ones_on_sigint(tmp_path):
+    out = tmp_path / "wakes.txt"
+    probe = subprocess.Popen([*SOAK, "--wake-probe", str(out)], cwd=ROOT)
+    time.sleep(1.5)
+    probe.send_signal(signal.SIGINT)
+    assert probe.wait(timeout=10) == 0
+    wakes = read_wakes(out)
+    assert 50 < wakes.count <= 300  # at most one per 5 ms
+    assert all(delay > WAKE_LATE_S for _, delay in wakes.late)
+    assert read_wakes(tmp_path / "missing.txt") == Wakes()
+
+
+def test_each_pose_gap_is_shown_with_the_host_delay_within_it(tmp_path, capsys):
+    (tmp_path / "wakes.txt").write_text("100\n0.050 0.120\n0.300 0.030\n0.500 0.200\n")
+    wakes = read_wakes(tmp_path / "wakes.txt")
+    assert wakes.count == 100 and wakes.largest() == 0.2 and wakes.over(0.05) == 2
+    assert wakes.largest_within(0.01, 0.2) == 0.12 and wakes.largest_within(0.21, 0.3) == 0.0
+    assert wakes.since(0.3).late == [(0.3, 0.03), (0.5, 0.2)]
+    times = [0.0, 0.01, 0.2, 0.21]
+    explain_gaps(times, [10.0, 10.01, 10.02, 10.03], wakes)
+    out = capsys.readouterr().out
+    assert "/ host wake-up delay, ms" in out
+    worst = out.splitlines()[1].split("/")
+    assert [round(float(cell), 1) for cell in worst] == [190.0, 10.0, 180.0, 120.0]
 
 
 def test_sigterm_stops_the_rig_and_puts_the_host_back(tmp_path):
@@ -92,5 +122,6 @@ def test_sigterm_stops_the_rig_and_puts_the_host_back(tmp_path):
             soak.kill()
             soak.wait()
     assert softirq_threads() == host_before
-    for pattern in ("airsim_mapper.soak --pose-probe", "hello_ros.py --nodename soak_hello"):
+    probes = ("airsim_mapper.soak --pose-probe", "airsim_mapper.soak --wake-probe")
+    for pattern in (*probes, "hello_ros.py --nodename soak_hello"):
         assert subprocess.run(["pgrep", "-f", pattern], capture_output=True).returncode == 1, pattern

@@ -3,8 +3,9 @@
 In Project AirSim the GPU renders while the CPU simulates. Here both share the CPU, and a render in the
 server's own process holds its GIL in many short numpy steps while the simulation thread must publish
 poses on time, at the same priority as the ROS nodes downstream. `RenderWorker` renders with
-`camera.render` in a child process at nice +10 (`RENDER_NICE`), so on a busy machine the camera rates drop
-before the pose rate does.
+`camera.render` in a child process at nice +10 (`RENDER_NICE`), in a session and autogroup of its own at
+the same nice value (`lower_priority`), so on a busy machine the camera rates drop before the pose rate
+does.
 
 The child is `python -m airsim_mapper.simserver.render_worker FD NICE`: it reads requests from one end of
 a socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first message
@@ -20,6 +21,7 @@ process.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -120,6 +122,7 @@ class RenderWorker:
                 pass_fds=(theirs.fileno(),),
                 stdin=subprocess.DEVNULL,
                 env=_child_env(),
+                start_new_session=True,  # its own autogroup (see `lower_priority`)
             )
         except OSError as exc:
             ours.close()
@@ -158,10 +161,26 @@ def _child_env() -> dict[str, str]:
     return env
 
 
+def lower_priority(nice: int) -> int:
+    """Add `nice` to this process's nice value, and give its autogroup the result; returns the result.
+
+    With autogroup scheduling (`kernel.sched_autogroup_enabled`, on by default) the kernel first shares
+    the CPU between sessions, and a task's nice value only ranks it within its own session. A worker at
+    nice +10 in the server's session still took its whole session's share from every other session: on
+    the soak machine a nice-0 process that woke every 2 ms waited up to 250 ms for its CPU while the worker
+    ran. The worker therefore runs in a session of its own (the server starts it with a new session), and
+    sets that session's autogroup to its nice value, so it yields to every other process on the machine.
+    Without autogroup support the file is missing and the task's nice value does the same job.
+    """
+    result = os.nice(nice)
+    with contextlib.suppress(OSError):  # no autogroup support, or a nice value below 0 (needs privileges)
+        Path("/proc/self/autogroup").write_text(f"{result}\n")
+    return result
+
+
 def serve(conn: Connection, nice: int) -> None:
     """The child's loop: the world first, then one answer per request until end of file."""
-    if nice:
-        os.nice(nice)
+    lower_priority(nice)
     world: World = conn.recv()
     while True:
         try:

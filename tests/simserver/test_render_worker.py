@@ -140,7 +140,14 @@ def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(la
             assert kids == []
         else:
             assert len(kids) == 1
-            assert nice_of(kids[0]) == min(19, nice_of(server.process.popen.pid) + RENDER_NICE)
+            nice = min(19, nice_of(server.process.popen.pid) + RENDER_NICE)
+            assert nice_of(kids[0]) == nice
+            # its own session, so its nice value also holds against other sessions (autogroup scheduling)
+            assert os.getsid(kids[0]) == kids[0] != os.getsid(server.process.popen.pid)
+            if Path("/proc/self/autogroup").exists():
+                group = Path(f"/proc/{kids[0]}/autogroup").read_text().split()
+                assert group[0] != Path(f"/proc/{server.process.popen.pid}/autogroup").read_text().split()[0]
+                assert group[1:] == ["nice", str(nice)]
             assert b"airsim_mapper.simserver.render_worker" in Path(f"/proc/{kids[0]}/cmdline").read_bytes()
     finally:
         client.disconnect()
