@@ -10,6 +10,10 @@ always available (worst wake-up 2.7 ms). With the ksoftirqd threads at nice -10 
 since a real-time ksoftirqd preempts every process for the softirq work of 100 MB/s of images (README,
 Reliability).
 
+The larger cause of those gaps turned out to be autogroup scheduling (the render worker's nice value
+counted only within the server's session; see `simserver/render_worker.py`). Kernel threads are outside
+every autogroup, which is why renicing them helped; a nice -10 subscriber in a session of its own did not.
+
 This changes a machine setting, so only `make soak` applies it, by default and for the length of the run,
 and only as root; the README gives the one-line equivalent (`renice`) for running a simulation on a small
 machine.
