@@ -5,7 +5,8 @@ while the bridge runs in the same process), subscribes to every topic that proce
 the process's RSS and thread count every few seconds. A separate probe process receives actual_pose alone.
 After a warm-up it reports delivered rates, the bridge's drop counts and per-stream peaks (from its status
 topic), and the largest gaps between two actual_pose messages, as seen by the probe (the verdict) and by
-the monitor, with the sim-time step and the lateness across each (where the gap came from).
+the monitor, with the sim-time step and the lateness across each (where the gap came from). A wake probe,
+a process that only sleeps, gives the host's own scheduling delays for comparison.
 
 Pass: RSS growth under 20 MB after warm-up, a thread count that stays within 2 of its post-warm-up value,
 no actual_pose gap over 100 ms. Exit code 0 on pass, 1 on fail. SOAK_SECONDS sets the length (600).
@@ -487,8 +488,8 @@ class Wakes:
         return Wakes(self.count, [(t, d) for t, d in self.late if t >= start])
 
     def largest_within(self, start: float, end: float) -> float:
-        """The largest delay of a sleep that began within [start, end) (0 if none was late)."""
-        return max((d for t, d in self.late if start <= t < end), default=0.0)
+        """The largest delay of a late sleep that overlapped [start, end) (0 if none did)."""
+        return max((d for t, d in self.late if t < end and t + WAKE_PERIOD_S + d > start), default=0.0)
 
     def largest(self) -> float:
         return max((d for _, d in self.late), default=0.0)

@@ -87,6 +87,7 @@ def test_each_pose_gap_is_shown_with_the_host_delay_within_it(tmp_path, capsys):
     wakes = read_wakes(tmp_path / "wakes.txt")
     assert wakes.count == 100 and wakes.largest() == 0.2 and wakes.over(0.05) == 2
     assert wakes.largest_within(0.01, 0.2) == 0.12 and wakes.largest_within(0.21, 0.3) == 0.0
+    assert wakes.largest_within(0.1, 0.15) == 0.12  # a sleep from before the gap, late across it
     assert wakes.since(0.3).late == [(0.3, 0.03), (0.5, 0.2)]
     times = [0.0, 0.01, 0.2, 0.21]
     explain_gaps(times, [10.0, 10.01, 10.02, 10.03], wakes)
