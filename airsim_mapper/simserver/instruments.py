@@ -200,8 +200,9 @@ def distance_message(world: World, kin: Kinematics, cfg: Mapping[str, Any], t_ns
     mount_position, mount_orientation = parse_origin(cfg.get("origin"))
     position, orientation = compose(kin.position, kin.orientation, mount_position, mount_orientation)
     beam = quat_to_matrix(orientation)[:, 0]
-    hits = world.raycast(position, beam[None, :], high)
-    distance = float(hits.distance[0]) if bool(hits.hit[0]) else high
+    distance = world.range_along(position, beam, high)
+    if distance is None:
+        distance = high
     return {
         "time_stamp": int(t_ns),
         "current_distance": min(high, max(low, distance)),

@@ -386,6 +386,50 @@ class World:
                 nearest = min(nearest, float(t.min()))
         return z + nearest if nearest <= max_range else None
 
+    def range_along(
+        self, origin: Sequence[float], direction: Sequence[float], max_range: float
+    ) -> float | None:
+        """Distance along `direction` from `origin` to the first surface within `max_range`, or None.
+
+        The same answer as `raycast` for one ray, by the same rules (the ground seen from above only,
+        one-sided surfaces, hits within `_EPS` of the origin ignored), without its per-call overhead: the
+        distance sensor asks once per reading, 100 times a second.
+        """
+        ox, oy, oz = (float(v) for v in origin)
+        dx, dy, dz = (float(v) for v in direction)
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if norm == 0.0:
+            return None
+        dx, dy, dz = dx / norm, dy / norm, dz / norm
+        nearest = -oz / dz if dz > 1e-6 and oz < 0.0 else math.inf  # the ground plane
+        if self._box_index.size:
+            cos, sin = self._box_cos, self._box_sin
+            rx, ry, rz = ox - self._box_cols[0], oy - self._box_cols[1], oz - self._box_cols[2]
+            local_o = (cos * rx + sin * ry, cos * ry - sin * rx, rz)
+            local_d = (cos * dx + sin * dy, cos * dy - sin * dx, np.full_like(cos, dz))
+            near, far = None, None
+            with np.errstate(divide="ignore", invalid="ignore"):
+                for axis in range(3):  # the slab test of `_box_pairs`, over boxes instead of pairs
+                    da = local_d[axis]
+                    exit_half = np.copysign(self._box_half_cols[axis], da)
+                    entry = (exit_half + local_o[axis]) * -(1.0 / da)
+                    leave = (exit_half - local_o[axis]) * (1.0 / da)
+                    near = entry if near is None else np.fmax(near, entry)
+                    far = leave if far is None else np.fmin(far, leave)
+                t = near[(near <= far) & (near > _EPS)]
+            if t.size:
+                nearest = min(nearest, float(t.min()))
+        if self._sphere_index.size:
+            cx, cy, cz = self._sphere_cols
+            rx, ry, rz = ox - cx, oy - cy, oz - cz
+            b = dx * rx + dy * ry + dz * rz
+            disc = b * b - (rx * rx + ry * ry + rz * rz - self._sphere_radius * self._sphere_radius)
+            t = -b - np.sqrt(np.maximum(disc, 0.0))
+            t = t[(disc >= 0.0) & (t > _EPS)]
+            if t.size:
+                nearest = min(nearest, float(t.min()))
+        return nearest if nearest <= max_range else None
+
     # ---------------------------------------------------------------- collisions
     def collide_sphere(self, center: np.ndarray, radius: float) -> Contact | None:
         """Deepest overlap of a sphere with a collidable object (the ground is not considered)."""

@@ -200,6 +200,31 @@ def test_surface_below_matches_a_straight_down_ray_cast_everywhere():
     assert scene.surface_below([3.0, -2.0, -20.0], 5.0) is None  # the tower's top is 11 m down
 
 
+def test_range_along_matches_a_one_ray_cast_in_every_direction():
+    scene = World(
+        [
+            box("Yawed", [3.0, -2.0, -2.0], [4.0, 2.0, 4.0], yaw_deg=30.0),
+            box("Tower", [3.0, -2.0, -8.0], [1.0, 1.0, 2.0]),
+            sphere("Ball", [-4.0, 3.0, -3.0], 2.0),
+        ]
+    )
+    rng = np.random.default_rng(12)
+    points = rng.uniform([-8, -6, -12], [8, 6, 1], size=(3000, 3))  # some inside objects, some underground
+    directions = rng.normal(size=(3000, 3))
+    directions[:300] = [0.0, 0.0, 1.0]  # straight down, and axis-parallel rays, the slab test's edge case
+    directions[300:600] = [1.0, 0.0, 0.0]
+    hits = scene.raycast(points, directions, 30.0)
+    for point, direction, distance in zip(points, directions, hits.distance.astype(float)):
+        got = scene.range_along(point, direction, 30.0)
+        if math.isinf(distance):
+            assert got is None, (point, direction)
+        else:
+            assert got == pytest.approx(distance, abs=1e-3), (point, direction)
+    kinds = set(hits.object_index.tolist())
+    assert {GROUND_INDEX, MISS_INDEX, 0, 1, 2} <= kinds  # every case was met
+    assert scene.range_along([0.0, 0.0, -5.0], [0.0, 0.0, 0.0], 30.0) is None
+
+
 def test_collision_checks_far_from_every_object_skip_the_exact_test(world, monkeypatch):
     calls = []
     monkeypatch.setattr(World, "_box_contacts", lambda *a: calls.append(a))
