@@ -6,10 +6,8 @@ topic the bridge publishes. At the end it writes out/demo.png and out/demo.bag a
 
 from __future__ import annotations
 
-import contextlib
 import os
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -21,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from airsim_mapper.localproc import free_port
+from airsim_mapper.localproc import free_port, stop_group
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = Path(os.environ.get("DEMO_OUT", ROOT / "out"))
@@ -41,13 +39,9 @@ class Child:
     log: Path
 
     def stop(self) -> None:
-        if self.popen.poll() is None:
-            try:
-                os.killpg(self.popen.pid, signal.SIGINT)
-                self.popen.wait(timeout=10)
-            except (subprocess.TimeoutExpired, ProcessLookupError):
-                with contextlib.suppress(ProcessLookupError):
-                    os.killpg(self.popen.pid, signal.SIGKILL)
+        """SIGINT to its group, SIGKILL after 10 s, and any descendant in a session of its own (the render
+        worker) killed if it outlived it."""
+        stop_group(self.popen, 10.0)
 
 
 @dataclass

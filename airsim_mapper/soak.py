@@ -201,8 +201,9 @@ def explain_gaps(times: list[float], stamps: list[float], wakes: Wakes | None = 
     The headless server's steppable clock runs at wall speed, so `receive time - stamp` is a constant plus
     the delivery delay; its minimum over the run is the floor. A gap followed by a late message (lateness
     close to the gap) was a delay on the way; a gap with a matching stamp step and no lateness means no
-    pose was produced or all were dropped. With `wakes`, the last column is the wake probe's largest
-    delay within the gap: close to the gap, the host kept every process waiting, not only the bridge.
+    pose was produced or all were dropped. With `wakes`, the last column is the longest stretch of the gap
+    in which the wake probe was kept waiting: close to the gap, the host held up every process, not only
+    the bridge.
     """
     import numpy as np
 
@@ -211,10 +212,11 @@ def explain_gaps(times: list[float], stamps: list[float], wakes: Wakes | None = 
     t, st = np.asarray(times), np.asarray(stamps)
     gaps, steps = np.diff(t), np.diff(st)
     late = (t - st) - (t - st).min()
-    head = "receive gap / sim-time step / lateness after" + (" / host wake-up delay" if wakes else "")
+    head = "receive gap / sim-time step / lateness after" + (" / host delay" if wakes is not None else "")
     print(f"largest actual_pose gaps after warm-up ({head}, ms):")
     for i in np.argsort(gaps)[::-1][:worst]:
-        cells = [gaps[i], steps[i], late[i + 1]] + ([wakes.largest_within(t[i], t[i + 1])] if wakes else [])
+        host = [wakes.largest_within(t[i], t[i + 1])] if wakes is not None else []
+        cells = [gaps[i], steps[i], late[i + 1], *host]
         print("  " + " / ".join(f"{cell * 1000:7.1f}" for cell in cells))
     print(f"gaps over 50 ms: {int((gaps > 0.05).sum())}, over 100 ms: {int((gaps > 0.1).sum())}")
     print(
@@ -345,12 +347,16 @@ def run(seconds: float, workdir: Path) -> int:
         stop_group(probe, 30.0)  # on SIGINT the probe writes its file
         probe_times, probe_stamps = since(t0 + warmup, *read_probe(probe_file))
         stop_group(waker, 30.0)
-        wakes = read_wakes(wake_file).since(t0 + warmup)
+        wakes = read_wakes(wake_file)
+        wakes = wakes.since(t0 + warmup) if wakes is not None else None
         print(f"the wake probe (a process that only sleeps {WAKE_PERIOD_S * 1000:.0f} ms at a time):")
-        print(
-            f"  {wakes.count} wake-ups in all; after warm-up {wakes.over(0.02)} late by over 20 ms, "
-            f"{wakes.over(0.05)} by over 50 ms, the latest by {wakes.largest() * 1000:.1f} ms"
-        )
+        if wakes is None:
+            print(f"  it did not finish its file ({wake_file}): no host delays to compare")
+        else:
+            print(
+                f"  {wakes.count} wake-ups in all; after warm-up {wakes.over(0.02)} late by over 20 ms, "
+                f"{wakes.over(0.05)} by over 50 ms, the latest by {wakes.largest() * 1000:.1f} ms"
+            )
         print("the pose probe (a process receiving actual_pose only):")
         explain_gaps(probe_times, probe_stamps, wakes)
         print("the monitor (its process also receives every other stream):")
@@ -363,7 +369,7 @@ def run(seconds: float, workdir: Path) -> int:
             print(f"  {cells[0]:7.1f} / {cells[1]:7.1f} / {cells[2]:7.1f}  {topic}")
         poses = (probe_times, pose_times)
         measured = (samples, warmup, counts, counts_at_warmup, *poses, listener.status, seconds)
-        host_wake_max_ms = round(wakes.largest() * 1000, 1)
+        host_wake_max_ms = round(wakes.largest() * 1000, 1) if wakes is not None else None
     finally:
         rig.stop_all()
         hosttune.restore(tuned)
@@ -488,13 +494,16 @@ class Wakes:
         return Wakes(self.count, [(t, d) for t, d in self.late if t >= start])
 
     def largest_within(self, start: float, end: float) -> float:
-        """The largest delay of a late sleep that overlapped [start, end) (0 if none did)."""
-        return max((d for t, d in self.late if t < end and t + WAKE_PERIOD_S + d > start), default=0.0)
+        """The longest stretch of [start, end) that a late wake-up's delay covered (0 if none did)."""
+        covered = (min(end, t + WAKE_PERIOD_S + d) - max(start, t + WAKE_PERIOD_S) for t, d in self.late)
+        return max((c for c in covered if c > 0.0), default=0.0)
 
     def largest(self) -> float:
+        """The longest delay of the run."""
         return max((d for _, d in self.late), default=0.0)
 
     def over(self, limit_s: float) -> int:
+        """How many wake-ups came later than `limit_s`."""
         return sum(1 for _, d in self.late if d > limit_s)
 
 
@@ -502,30 +511,33 @@ def wake_probe(out: Path) -> int:
     """A process that only sleeps `WAKE_PERIOD_S` at a time; writes each wake-up late by over 5 ms.
 
     It runs at the bridge's priority in a session of its own, like every process of the rig, and does
-    nothing else: its delays are the host's scheduling delays, the floor under any pose gap.
+    nothing else: its delays are the host's scheduling delays, the floor under any pose gap. Each late
+    wake-up is written as it happens; the count of all wake-ups last, on SIGINT.
     """
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
-    late: list[str] = []
     count = 0
-    before = time.monotonic()
-    while not stop.is_set():
-        time.sleep(WAKE_PERIOD_S)
-        now = time.monotonic()
-        if now - before - WAKE_PERIOD_S > WAKE_LATE_S:
-            late.append(f"{before:.6f} {now - before - WAKE_PERIOD_S:.6f}\n")
-        count += 1
-        before = now
-    out.write_text(f"{count}\n" + "".join(late))
+    with out.open("w") as sink:
+        before = time.monotonic()
+        while not stop.is_set():
+            time.sleep(WAKE_PERIOD_S)
+            now = time.monotonic()
+            if now - before - WAKE_PERIOD_S > WAKE_LATE_S:
+                sink.write(f"{before:.6f} {now - before - WAKE_PERIOD_S:.6f}\n")
+                sink.flush()
+            count += 1
+            before = now
+        sink.write(f"wakes {count}\n")
     return 0
 
 
-def read_wakes(path: Path) -> Wakes:
+def read_wakes(path: Path) -> Wakes | None:
+    """The wake probe's file; None if it is missing or unfinished (the probe did not stop cleanly)."""
     lines = path.read_text().splitlines() if path.exists() else []
-    if not lines:
-        return Wakes()
-    rows = [line.split() for line in lines[1:]]
-    return Wakes(int(lines[0]), [(float(r[0]), float(r[1])) for r in rows])
+    if not lines or not lines[-1].startswith("wakes "):
+        return None
+    rows = [line.split() for line in lines[:-1]]
+    return Wakes(int(lines[-1].split()[1]), [(float(r[0]), float(r[1])) for r in rows])
 
 
 def since(start: float, times: list[float], stamps: list[float]) -> tuple[list[float], list[float]]:

@@ -13,15 +13,15 @@ is the World; each request is the arguments of `camera.render` after the world; 
 of RenderedImage, or the CameraError it raised.
 
 It starts on the first render, is replaced if it dies or hangs, and exits when the server closes its end
-or dies. It ignores SIGINT and SIGTERM, which a terminal or a supervisor sends to the whole process
-group, so a stopping server never loses its renderer first. A child that fails before its first answer
+or dies. In a session of its own it no longer receives the signals a terminal or a supervisor sends to
+the server's process group; it ignores SIGINT and SIGTERM anyway, so a stopping server never loses its
+renderer first. A child that fails before its first answer
 (it cannot be started, or cannot import) is reported once, and the server then renders in its own
 process.
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import os
 import signal
@@ -29,6 +29,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -39,7 +40,8 @@ from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.render_worker")
 
-RENDER_NICE = 10  # added to the server's nice value; 0 keeps the worker at the server's priority
+RENDER_NICE = 10  # added to the server's nice value; 0 keeps the worker at the server's priority and session
+AUTOGROUP = Path("/proc/self/autogroup")
 ANSWER_TIMEOUT_S = 10.0  # a render slower than this counts as a hung worker
 
 
@@ -122,7 +124,7 @@ class RenderWorker:
                 pass_fds=(theirs.fileno(),),
                 stdin=subprocess.DEVNULL,
                 env=_child_env(),
-                start_new_session=True,  # its own autogroup (see `lower_priority`)
+                start_new_session=self.nice > 0,  # its own autogroup (see `lower_priority`)
             )
         except OSError as exc:
             ours.close()
@@ -161,21 +163,40 @@ def _child_env() -> dict[str, str]:
     return env
 
 
-def lower_priority(nice: int) -> int:
+def lower_priority(nice: int, autogroup: Path = AUTOGROUP) -> int:
     """Add `nice` to this process's nice value, and give its autogroup the result; returns the result.
 
     With autogroup scheduling (`kernel.sched_autogroup_enabled`, on by default) the kernel first shares
     the CPU between sessions, and a task's nice value only ranks it within its own session. A worker at
     nice +10 in the server's session still took its whole session's share from every other session: on
     the soak machine a nice-0 process that woke every 2 ms waited up to 250 ms for its CPU while the worker
-    ran. The worker therefore runs in a session of its own (the server starts it with a new session), and
-    sets that session's autogroup to its nice value, so it yields to every other process on the machine.
-    Without autogroup support the file is missing and the task's nice value does the same job.
+    ran. The worker therefore runs in a session of its own (the server starts it with a new session when
+    `nice` > 0), and sets that session's autogroup to its nice value, so it yields to every process on the
+    machine. Without autogroup support the file is missing and the task's nice value does the same job.
     """
     result = os.nice(nice)
-    with contextlib.suppress(OSError):  # no autogroup support, or a nice value below 0 (needs privileges)
-        Path("/proc/self/autogroup").write_text(f"{result}\n")
+    if nice > 0 and autogroup.exists() and not set_autogroup_nice(autogroup, result):
+        LOG.warning(
+            "render worker: could not set its autogroup to nice %d; it may slow other processes", result
+        )
     return result
+
+
+def set_autogroup_nice(path: Path, nice: int, attempts: int = 20, pause_s: float = 0.1) -> bool:
+    """Write `nice` to an autogroup file; False if it could not be done.
+
+    Without CAP_SYS_ADMIN the kernel allows one autogroup write per 100 ms on the whole machine and
+    answers the next with EAGAIN, so a busy moment (two servers starting) is waited out.
+    """
+    for _ in range(attempts):
+        try:
+            path.write_text(f"{nice}\n")
+            return True
+        except BlockingIOError:
+            time.sleep(pause_s)
+        except OSError:  # a nice value below 0 without the privilege for it
+            return False
+    return False
 
 
 def serve(conn: Connection, nice: int) -> None:
@@ -199,7 +220,8 @@ def serve(conn: Connection, nice: int) -> None:
 def main(argv: Sequence[str]) -> int:
     from airsim_mapper.tuning import limit_blas_threads
 
-    # Ctrl-C and a group's SIGTERM reach us too: the server finishes its render and then closes our end
+    # a signal meant for the server (its group, when nice is 0) must not stop us first: the server finishes
+    # its render and then closes our end
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
     limit_blas_threads(1)

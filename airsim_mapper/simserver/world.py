@@ -428,7 +428,7 @@ class World:
             t = t[(disc >= 0.0) & (t > _EPS)]
             if t.size:
                 nearest = min(nearest, float(t.min()))
-        return nearest if nearest <= max_range else None
+        return nearest if nearest <= max_range and math.isfinite(nearest) else None
 
     # ---------------------------------------------------------------- collisions
     def collide_sphere(self, center: np.ndarray, radius: float) -> Contact | None:

@@ -14,7 +14,12 @@ from harness import wait_until
 from simharness import start_simserver
 
 from airsim_mapper.simserver import camera, render_worker
-from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
+from airsim_mapper.simserver.render_worker import (
+    RENDER_NICE,
+    RenderWorker,
+    RenderWorkerError,
+    set_autogroup_nice,
+)
 from airsim_mapper.simserver.world import load_world
 from simserver.clientkit import load_world as load_scene
 
@@ -151,9 +156,10 @@ def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(la
             assert b"airsim_mapper.simserver.render_worker" in Path(f"/proc/{kids[0]}/cmdline").read_bytes()
     finally:
         client.disconnect()
-    if not in_process:  # SIGTERM to the whole group: the server stops first, then its renderer
-        assert server.process.stop(signal.SIGTERM, timeout=10.0) == 0
-        assert not alive(kids[0])
+    if not in_process:  # SIGTERM to the server: it stops, and its renderer exits on end of file
+        server.process.popen.send_signal(signal.SIGTERM)
+        assert server.process.popen.wait(timeout=10.0) == 0
+        wait_until(lambda: not alive(kids[0]), 5.0, what="the render worker to exit after its server")
         assert "sensor step failed" not in server.process.output()
 
 
@@ -180,3 +186,35 @@ def test_a_replacement_that_cannot_start_falls_back_to_rendering_in_process(work
         image = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [3])[3]
     assert image == camera.render(load_world(), POSITION, ORIENTATION, 32, 24, 90.0, [3])[3]
     assert "the render worker does not start" in caplog.text and worker.starts == 2
+
+
+class FlakyAutogroup:
+    """An autogroup file that answers EAGAIN `busy` times (the kernel's limit for unprivileged writers)."""
+
+    def __init__(self, busy: int, error: OSError | None = None) -> None:
+        self.busy, self.error, self.written = busy, error, []
+
+    def write_text(self, text: str) -> None:
+        if self.error is not None:
+            raise self.error
+        if self.busy:
+            self.busy -= 1
+            raise BlockingIOError(11, "Resource temporarily unavailable")
+        self.written.append(text)
+
+
+def test_the_autogroup_write_waits_out_the_kernels_rate_limit_and_reports_a_refusal():
+    flaky = FlakyAutogroup(busy=3)
+    assert set_autogroup_nice(flaky, 10, pause_s=0.0) and flaky.written == ["10\n"]
+    assert not set_autogroup_nice(FlakyAutogroup(busy=99), 10, attempts=5, pause_s=0.0)
+    assert not set_autogroup_nice(FlakyAutogroup(0, PermissionError(1, "Operation not permitted")), -5)
+
+
+def test_a_worker_at_the_servers_priority_stays_in_the_servers_session():
+    rw = RenderWorker(load_world(), nice=0)
+    try:
+        rw.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+        assert os.getsid(rw.pid) == os.getsid(0)
+        assert nice_of(rw.pid) == nice_of(os.getpid())
+    finally:
+        rw.close()

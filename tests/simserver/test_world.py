@@ -223,6 +223,7 @@ def test_range_along_matches_a_one_ray_cast_in_every_direction():
     kinds = set(hits.object_index.tolist())
     assert {GROUND_INDEX, MISS_INDEX, 0, 1, 2} <= kinds  # every case was met
     assert scene.range_along([0.0, 0.0, -5.0], [0.0, 0.0, 0.0], 30.0) is None
+    assert scene.range_along([0.0, 0.0, -5.0], [0.0, 0.0, -1.0], math.inf) is None  # up, into the sky
 
 
 def test_collision_checks_far_from_every_object_skip_the_exact_test(world, monkeypatch):
