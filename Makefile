@@ -5,10 +5,15 @@ DEMO_SECONDS ?= 30
 SOAK_SECONDS ?= 600
 SCREENSHOT ?= docs/rviz.png
 
-.PHONY: setup test lint demo bench soak screenshot clean
+.PHONY: setup check test lint demo bench soak screenshot clean
 
 setup:
 	@bash tools/setup.sh
+
+# The fast inner loop: lint and every test that starts no process (no roscore, server or node).
+check: setup
+	@$(PY) -m ruff check .
+	@$(PY) -m pytest -q -m "not live"
 
 test: setup
 	@$(PY) -m ruff check .
@@ -19,16 +24,16 @@ lint: setup
 	@$(PY) -m ruff format --check .
 
 demo: setup
-	@DEMO_SECONDS=$(DEMO_SECONDS) $(PY) -m airsim_mapper.demo
+	@DEMO_SECONDS=$(DEMO_SECONDS) $(PY) -m tools.demo
 
 bench: setup
-	@$(PY) -m airsim_mapper.bench
+	@$(PY) -m tools.bench
 
 soak: setup
-	@SOAK_SECONDS=$(SOAK_SECONDS) $(PY) -m airsim_mapper.soak
+	@SOAK_SECONDS=$(SOAK_SECONDS) $(PY) -m tools.soak
 
 screenshot: setup
-	@$(PY) -m airsim_mapper.screenshot --out $(SCREENSHOT)
+	@$(PY) -m tools.screenshot --out $(SCREENSHOT)
 
 clean:
-	rm -rf .venv out bench/results.json .pytest_cache .ruff_cache
+	rm -rf .venv out tools/bench/results.json .pytest_cache .ruff_cache

@@ -57,26 +57,6 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     )
 
 
-def matrix_to_quat(m: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) with w >= 0 of a rotation matrix."""
-    m = np.asarray(m, dtype=float)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    q = quat_normalize(np.array(q))
-    return -q if q[0] < 0 else q
-
-
 def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Rotate vectors v (..., 3) by the unit quaternion q."""
     return np.asarray(v, dtype=float) @ quat_to_matrix(q).T
@@ -112,8 +92,8 @@ def yaw_of(q: np.ndarray) -> float:
 
 # --- single poses as plain floats -------------------------------------------------------------------
 # The bridge converts one pose per message, 100 times a second per robot and several times per message
-# (camera frames, odometry). numpy's per-call overhead on 3- and 4-vectors costs ten times the arithmetic,
-# so these take any sequences of floats and return tuples.
+# (camera frames, odometry). numpy's per-call overhead on 3- and 4-vectors outweighs the arithmetic
+# (docs/performance.md), so these take any sequences of floats and return tuples.
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]

@@ -1,7 +1,7 @@
-"""Project AirSim's camera image types: one table for the simulator's topic leaves, one for the seed's names.
+"""Project AirSim's camera image types: one table for the simulator's topic leaves, one for the ROS names.
 
-The two differ only for type 6: the simulator publishes `surface_normals_camera`, while the bridge's
-documentation (and so the default mapping) calls the ROS side `surface_normals`.
+The two differ only for type 6: the simulator publishes `surface_normals_camera`, while the Project AirSim
+ROS bridge documentation (and so the default mapping) calls the ROS side `surface_normals`.
 """
 
 from __future__ import annotations
@@ -17,5 +17,6 @@ SIM_IMAGE_LEAVES: dict[int, str] = {
     6: "surface_normals_camera",
 }
 
-# image-type id -> <image_type> in ROS names, as the seed's table gives it (a mapping may override it)
-SEED_IMAGE_TYPES: dict[int, str] = {**SIM_IMAGE_LEAVES, 6: "surface_normals"}
+# image-type id -> <image_type> in ROS names, as the table of the Project AirSim ROS bridge documentation
+# gives it (a mapping may override it)
+DOCUMENTED_IMAGE_TYPES: dict[int, str] = {**SIM_IMAGE_LEAVES, 6: "surface_normals"}

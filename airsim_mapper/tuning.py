@@ -6,16 +6,16 @@ the soak). The bridge adds a rospy setting on top (`engine/realtime.py`).
 One BLAS thread: numpy's OpenBLAS otherwise spins its idle workers on `sched_yield`.
 
 The headless server multiplies ray directions by rotations for every camera, lidar and radar frame. Each
-product large enough to use OpenBLAS's thread pool leaves its workers spinning afterwards; on a two-core
-machine `make soak` measured 17,000 `sched_yield` calls a second and 82 % of a core in system time in the
-server, which starved the bridge and stretched pose gaps to 200-300 ms. The products here are small
-(N x 3 by 3 x 3): one thread is as fast, and spins nothing. The limit is set at run time in numpy's own
-bundled library, so it works whatever was imported first and leaves other BLAS users alone.
+product large enough to use OpenBLAS's thread pool leaves its workers spinning afterwards, as system time
+in the server that starves the bridge on a small machine (docs/reliability.md has the measurements). The
+products here are small (N x 3 by 3 x 3): one thread is as fast, and spins nothing. The limit is set at
+run time in numpy's own bundled library, so it works whatever was imported first and leaves other BLAS
+users alone.
 
 A 0.5 ms switch interval: a thread that blocks (a socket send, a sleep) gives up the GIL, and while a
 CPU-bound thread runs it gets it back only after a switch interval, 5 ms by default. The server's
-simulation thread and the bridge's receive loop block once per message, so they were held to about 200
-messages a second.
+simulation thread and the bridge's receive loop block once per message, so the default would hold them
+to about 200 messages a second.
 """
 
 from __future__ import annotations

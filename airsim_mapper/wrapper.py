@@ -1,4 +1,5 @@
-"""ProjectAirSimWrapper: the bridge as an object a mission script embeds (the seed's public API).
+"""ProjectAirSimWrapper: the bridge as an object a mission script embeds (the public API that the Project
+AirSim ROS bridge documentation describes).
 
 Call `rospy.init_node` first. The wrapper either creates its own client (kept in `projectairsim_client`
 and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
@@ -21,16 +22,15 @@ from typing import Any
 import rospy
 
 from airsim_mapper.engine.diagnostics import Diagnostics
-from airsim_mapper.engine.engine import Engine
+from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
 from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
-ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_MAPPING = ROOT / "mappings" / "default.yaml"
 log = logging.getLogger("rosout.airsim_mapper")
 
 
@@ -71,8 +71,10 @@ class ProjectAirSimWrapper:
         namespace: str = "",
         disconnect_on_shutdown: bool | None = None,
         client_factory: Callable[[], Any] | None = None,
+        shutdown_timeout: float = SHUTDOWN_TIMEOUT_S,
     ) -> None:
         redirect_client_log()
+        self.shutdown_timeout = shutdown_timeout
         self.mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
         self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown
         if client is None:
@@ -135,10 +137,9 @@ class ProjectAirSimWrapper:
         self._closed = True
         self.master_watch.stop()
         self.diagnostics.stop()
-        lost = self.engine.sim.dead
-        self.engine.shutdown()
+        # Within the engine's shutdown budget whatever the simulator does: an owned client's subscriptions
+        # are unsubscribed with the engine's own in one bounded request, then its sockets are closed (the
+        # client's disconnect() would wait up to 300 s for a frozen simulator's reply).
+        self.engine.shutdown(self.shutdown_timeout, client_topics=self._owns_client)
         if self._owns_client:
-            if lost:  # nobody would answer the client's unsubscribe request
-                close_client(self.engine.client)
-            else:
-                self.engine.client.disconnect()
+            close_client(self.engine.client)

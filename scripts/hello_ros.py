@@ -33,7 +33,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--simconfigpath", default=str(ROOT / "sim_config"))
     parser.add_argument("--servicesport", type=int, default=8990)
     parser.add_argument("--topicsport", type=int, default=8989)
-    parser.add_argument("--mapping", default=str(ROOT / "mappings" / "default.yaml"))
+    parser.add_argument("--mapping", default="default", help="mapping YAML file or shipped mapping name")
     parser.add_argument("--scene", default="scene_drone_sensors.jsonc")
     parser.add_argument("--robot", default="Drone1")
     parser.add_argument("--target", default="17 17 -4", help="NED point near the orange ball, 'x y z' metres")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout without install
 
-from airsim_mapper.cli.node import main
+from airsim_mapper.cli.node import run
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

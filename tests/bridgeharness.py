@@ -4,50 +4,28 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from harness import ROOT, Launcher, Process, wait_until
-from simharness import SimServer
-
-NODE_SCRIPT = ROOT / "scripts" / "projectairsim_node.py"
-SIM_CONFIG_DIR = ROOT / "sim_config"
+from harness import Child, Rig, SimServer, wait_until
 
 
 @dataclass
-class Rig:
+class Stack:
     """A headless server and a bridge node attached to the session's master."""
 
-    launcher: Launcher
+    launcher: Rig
     sim: SimServer
-    node: Process | None
+    node: Child | None
     node_name: str
 
-    def start_node(self, *args: str, node_name: str = "bridge", wait_for: str | None = None) -> Process:
+    def start_node(self, *args: str, node_name: str = "bridge", wait_for: str | None = None) -> Child:
         self.node_name = node_name
-        self.node = self.launcher.python(
-            f"node_{node_name}",
-            [
-                str(NODE_SCRIPT),
-                "--topicsport",
-                str(self.sim.topics_port),
-                "--servicesport",
-                str(self.sim.services_port),
-                "--simconfigpath",
-                str(SIM_CONFIG_DIR),
-                "--nodename",
-                node_name,
-                *args,
-            ],
-        )
+        self.node = self.launcher.node(self.sim.ports, *args, node_name=node_name)
         if wait_for:
             wait_topic(wait_for, self.node)
         return self.node
 
     def services_client(self):
         """A services-only client (the bridge holds the single topics connection)."""
-        from projectairsim import ProjectAirSimClient
-
-        client = ProjectAirSimClient(self.sim.address, self.sim.topics_port, self.sim.services_port)
-        client.connect_services()
-        return client
+        return self.sim.services_client()
 
 
 def published_topics() -> dict[str, str]:
@@ -56,7 +34,7 @@ def published_topics() -> dict[str, str]:
     return dict(rospy.get_published_topics())
 
 
-def wait_topic(topic: str, node: Process | None = None, timeout: float = 60.0) -> None:
+def wait_topic(topic: str, node: Child | None = None, timeout: float = 60.0) -> None:
     def up() -> bool:
         if node is not None and not node.alive():
             raise AssertionError(f"the bridge node exited:\n{node.output()}")

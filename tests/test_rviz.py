@@ -4,7 +4,6 @@ marker node, RViz)."""
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import subprocess
@@ -17,7 +16,6 @@ import numpy as np
 import pytest
 from harness import ROOT, SIM_CONFIG
 
-from airsim_mapper import screenshot
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.radar import radar_scan
 from airsim_mapper.geometry import quat_from_rpy
@@ -33,6 +31,7 @@ from airsim_mapper.rviz_radar import (
 )
 from airsim_mapper.simserver.radar import RadarModel
 from airsim_mapper.simserver.world import load_world
+from tools.screenshot import screenshot
 
 LAUNCH = ROOT / "launch" / "rviz.launch"
 RADAR_FRAME = "airsim_node/Drone1/radar1"
@@ -128,7 +127,7 @@ def test_an_empty_scan_deletes_the_marker_and_non_finite_returns_are_dropped():
 def test_server_detection_through_the_bridge_converter_lands_on_the_ball(convention, sign):
     """Headless server radar -> bridge radar_scan converter -> marker: the sphere sits on the ball's surface,
     on the line to its centre (the ball: centre (20, 20, -3) NED, radius 1 m)."""
-    robot = commentjson.loads((SIM_CONFIG / "radar_tower.jsonc").read_text())
+    robot = commentjson.loads((SIM_CONFIG / "robot_radar_tower.jsonc").read_text())
     radar = RadarModel.from_config(next(s for s in robot["sensors"] if s["type"] == "radar"))
     facing_east = quat_from_rpy(0.0, 0.0, math.pi / 2)
     detections = radar.detect(load_world(), np.array([25.0, 8.0, -1.0]), facing_east, np.zeros(3), 0)
@@ -187,6 +186,7 @@ def test_every_frame_the_config_names_is_published_by_the_default_mapping():
     assert shown <= frames
 
 
+@pytest.mark.live
 def test_the_launch_file_starts_the_sim_the_mission_the_marker_node_and_rviz(tmp_path):
     env = {
         **os.environ,
@@ -205,118 +205,3 @@ def test_the_launch_file_starts_the_sim_the_mission_the_marker_node_and_rviz(tmp
     assert nodes() == {"/headless_sim", "/projectairsim", "/radar_markers", "/rviz"}
     assert nodes("bridge:=node", "with_sim:=false", "rviz:=false") == {"/projectairsim", "/radar_markers"}
     assert nodes("bridge:=none") == {"/headless_sim", "/radar_markers", "/rviz"}
-
-
-def test_xwd_pixels_are_decoded_with_the_files_masks(tmp_path):
-    rgb = np.zeros((2, 3, 3), np.uint8)
-    rgb[0, 0], rgb[1, 2] = (255, 0, 0), (1, 2, 3)
-    words = (rgb[..., 0].astype("<u4") << 16) | (rgb[..., 1].astype("<u4") << 8) | rgb[..., 2]
-    # XWD 7 header (25 big-endian words), ZPixmap, 32 bpp, LSB-first pixels, 4 bytes/line of padding
-    head = [104, 7, 2, 24, 3, 2, 0, 0, 32, 0, 32, 32, 16, 4, 0xFF0000, 0xFF00, 0xFF, 8, 0, 0, 3, 2, 0, 0, 0]
-    body = np.zeros((2, 4), "<u4")
-    body[:, :3] = words
-    path = tmp_path / "screen.xwd"
-    path.write_bytes(np.array(head, ">u4").tobytes() + b"name" + body.tobytes())
-    assert (screenshot.read_xwd(path) == rgb).all()
-
-
-# -- end to end on the real stack -------------------------------------------------------------------------
-
-
-def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_path):
-    from PIL import Image
-
-    png, report_path = tmp_path / "rviz.png", tmp_path / "report.json"
-    run = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "airsim_mapper.screenshot",
-            "--out",
-            str(png),
-            "--report",
-            str(report_path),
-            "--settle",
-            "3",
-            "--away",
-            "0",
-            "--timeout",
-            "180",
-            "--keep",
-            str(tmp_path / "logs"),
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=400,
-    )
-    logs = "\n".join(
-        f"--- {p.name}\n{p.read_text(errors='replace')[-3000:]}"
-        for p in sorted((tmp_path / "logs").glob("*.log"))
-    )
-    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:] + logs
-    report = json.loads(report_path.read_text())
-
-    # RViz ran and subscribed (per the master) to every topic of its config, and to tf
-    assert report["rviz_alive"] is True
-    wanted = set(screenshot.config_topics()) | {"/tf", "/tf_static"}
-    assert wanted <= set(report["rviz_subscriptions"])
-    # real data flowed: camera images, lidar clouds, and radar markers from the marker node
-    assert report["messages"][screenshot.IMAGE_TOPIC] >= 3
-    assert report["messages"][screenshot.LIDAR_TOPIC] >= 3
-    assert report["marker_publishers"] == ["/radar_markers"]
-    assert report["radar_marker_points"] > 0
-    assert report["radar_marker_frame"] == RADAR_FRAME
-
-    # the picture is the X screen with RViz on it, not a blank frame
-    with Image.open(png) as image:
-        assert image.size == (1280, 800) and image.mode == "RGB"
-        pixels = np.asarray(image)
-    assert pixels.std() > 20
-    colours = np.unique(pixels.reshape(-1, 3), axis=0)
-    assert len(colours) > 300
-    background = np.all(pixels == (40, 40, 48), axis=-1).mean()  # the config's 3D background colour
-    assert 0.05 < background < 0.9
-
-    # everything it started is gone: the display, the master and the simulator's ports
-    display = report["display"].lstrip(":")
-    assert not os.path.exists(f"/tmp/.X11-unix/X{display}")
-    port = report["master_uri"].rsplit(":", 1)[1]
-    for pattern in (f"roscore -p {port}", f"--topicsport {report['sim_ports'][0]}", str(tmp_path / "logs")):
-        leftovers = subprocess.run(["pgrep", "-f", "--", pattern], capture_output=True, text=True)
-        assert leftovers.returncode == 1, f"{pattern}: {leftovers.stdout}"
-
-
-def test_a_crash_of_rviz_itself_is_told_from_other_early_exits():
-    from airsim_mapper.screenshot import rviz_crashed
-
-    crashed = (
-        "roslaunch exited early; see roslaunch.log:\n"
-        "corrupted size vs. prev_size\n"
-        "================================================================================"
-        "REQUIRED process [rviz-4] has died!\n"
-        "process has died [pid 5282, exit code -6, cmd /usr/lib/rviz/rviz -d airsim_mapper.rviz]\n"
-        "Initiating shutdown!\n"
-    )
-    assert rviz_crashed(crashed)
-    assert not rviz_crashed(crashed.replace("exit code -6", "exit code 1"))  # RViz quit: a real error
-    assert not rviz_crashed(crashed.replace("[rviz-4]", "[headless_sim-1]"))
-    assert not rviz_crashed("roslaunch exited early; see roslaunch.log:\nRLException: cannot launch node")
-
-
-def test_an_rviz_crash_is_found_in_the_whole_log_even_when_later_output_pushed_it_out_of_the_message(
-    tmp_path,
-):
-    from airsim_mapper.screenshot import ChildExited, ScreenshotError, crashed_rviz
-
-    log = tmp_path / "roslaunch.log"
-    crash = "REQUIRED process [rviz-4] has died!\nprocess has died [pid 21007, exit code -6, cmd rviz]\n"
-    after = "".join(f"[projectairsim-2] shutting down, line {i}\n" for i in range(40))
-    log.write_text("free(): invalid next size (fast)\n" + crash + after)
-    exited = ChildExited("roslaunch", log)
-    message = str(exited)
-    assert "REQUIRED process" not in message and "line 39" in message
-    assert crashed_rviz(exited)
-    log.write_text(crash.replace("exit code -6", "exit code 1") + after)
-    assert not crashed_rviz(ChildExited("roslaunch", log))
-    assert not crashed_rviz(ScreenshotError(crash))  # only an exited process's log counts

@@ -1,5 +1,6 @@
 """airsim-mapper: project commands. `airsim-mapper topics` prints a mapping's expanded interface on a
 scene as a Markdown table (ROS name, type, direction, simulator side, frame, rule bridge).
+`airsim-mapper converters` prints the converter catalogue as a Markdown table (the README's table).
 
 Exit status: 0 done, 1 the mapping or scene is invalid (problems on stderr), 2 usage errors or unreadable
 files.
@@ -11,6 +12,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from airsim_mapper.convert import catalog
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
@@ -25,11 +27,14 @@ def _parser() -> argparse.ArgumentParser:
     topics = commands.add_parser(
         "topics", help="print the ROS interface a mapping makes for a scene, as a Markdown table"
     )
-    topics.add_argument("--mapping", required=True, help="the mapping YAML file, e.g. mappings/default.yaml")
+    topics.add_argument(
+        "--mapping", required=True, help="the mapping YAML file, or a shipped mapping's name (default, enu)"
+    )
     topics.add_argument("--scene", required=True, help="a scene config file name inside --simconfigpath")
     topics.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
     topics.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     topics.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
+    commands.add_parser("converters", help="print the converters a mapping may name, as a Markdown table")
     return parser
 
 
@@ -109,6 +114,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = _parser().parse_args(argv)
     except SystemExit as stop:  # argparse has printed the usage or help message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
+    if args.command == "converters":
+        sys.stdout.write(catalog.markdown_table())
+        return EXIT_OK
     return topics(args)
 
 

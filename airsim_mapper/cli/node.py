@@ -1,18 +1,24 @@
 """projectairsim_node: the bridge as a ROS node (python, rosrun and roslaunch).
 
-Switches as the seed documents them (--address, --nodename, --simconfigpath, --servicesport,
---topicsport), plus --mapping and --scene. An invalid mapping or scene stops the node with the
-validate-mapping errors and exit code 1, before anything connects. A simulator that is not running yet
-is waited for (one log line per attempt; backoff 0.5 s, then 2 s, then 5 s); one that restarts
-later is reconnected to and the last scene reloaded, without restarting the node.
+Switches as the Project AirSim ROS bridge documentation gives them (--address, --nodename,
+--simconfigpath, --servicesport, --topicsport), plus --mapping and --scene. An invalid mapping or scene
+stops the node with the validate-mapping errors and exit code 1, before anything connects. A simulator
+that is not running yet is waited for (one log line per attempt; backoff 0.5 s, then 2 s, then 5 s); one
+that restarts later is reconnected to and the last scene reloaded, without restarting the node.
+
+SIGINT or SIGTERM stops the node within --shutdown-timeout seconds whatever the simulator does (past
+that it exits with status 1 and says so); a second signal exits at once.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
+import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from functools import partial
@@ -25,7 +31,8 @@ log = logging.getLogger("rosout.airsim_mapper.node")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    from airsim_mapper.wrapper import DEFAULT_MAPPING
+    from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S
+    from airsim_mapper.resources import DEFAULT_MAPPING, shipped_mappings
 
     parser = argparse.ArgumentParser(prog="projectairsim_node.py", description=__doc__.splitlines()[0])
     parser.add_argument("--address", default="127.0.0.1", help="host running Project AirSim")
@@ -37,10 +44,53 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--simconfigpath", default="sim_config/", help="directory holding the scene configs")
     parser.add_argument("--servicesport", type=int, default=8990, help="Project AirSim services port")
     parser.add_argument("--topicsport", type=int, default=8989, help="Project AirSim pub-sub port")
-    parser.add_argument("--mapping", default=str(DEFAULT_MAPPING), help="mapping YAML file")
+    parser.add_argument(
+        "--mapping",
+        default=str(DEFAULT_MAPPING),
+        help=f"mapping YAML file, or a shipped mapping's name ({', '.join(shipped_mappings())})",
+    )
     parser.add_argument("--scene", default=None, help="scene config file to load at start")
     parser.add_argument("--namespace", default="", help="value of the <namespace> template variable")
-    return parser.parse_args(argv)
+    parser.add_argument(
+        "--shutdown-timeout",
+        type=float,
+        default=SHUTDOWN_TIMEOUT_S,
+        help=f"seconds a SIGINT/SIGTERM may take to stop the node (default {SHUTDOWN_TIMEOUT_S:g})",
+    )
+    args = parser.parse_args(argv)
+    if not args.shutdown_timeout > 0:
+        parser.error(f"--shutdown-timeout must be positive, got {args.shutdown_timeout}")
+    return args
+
+
+class Stopper:
+    """The node's signal handler: the first signal asks the main loop to stop and arms a deadline after
+    which the process exits anyway (status 1); a second signal exits at once (status 128 + signal)."""
+
+    def __init__(self, timeout: float) -> None:
+        self.timeout = timeout
+        self.signals: list[int] = []
+
+    def __call__(self, number: int, _frame: Any) -> None:
+        if self.signals:
+            _say_and_exit(f"second signal ({signal.Signals(number).name}): exiting at once", 128 + number)
+        self.signals.append(number)
+        deadline = threading.Timer(self.timeout, self._overdue)
+        deadline.daemon = True
+        deadline.start()
+
+    def _overdue(self) -> None:
+        _say_and_exit(f"shutdown took longer than {self.timeout:g} s (--shutdown-timeout): exiting", 1)
+
+    def __bool__(self) -> bool:
+        return bool(self.signals)
+
+
+def _say_and_exit(message: str, status: int) -> None:
+    """Exit now, without running more Python: the message goes straight to stderr."""
+    with contextlib.suppress(OSError):
+        os.write(2, f"[projectairsim_node] {message}\n".encode())
+    os._exit(status)
 
 
 def connect(
@@ -94,9 +144,9 @@ def main(argv: list[str] | None = None) -> int:
     # SIGINT during a service registration ran the engine's shutdown while the registration lock was held,
     # and the node hung (seen in CI). Here the handler only raises a flag; the hooks run from the loop below.
     rospy.init_node(node_name, anonymous=args.nodename is None, disable_signals=True)
-    stop: list[int] = []
+    stop = Stopper(args.shutdown_timeout)
     for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda number, _frame: stop.append(number))
+        signal.signal(sig, stop)
 
     def stopping() -> bool:
         return bool(stop) or rospy.is_shutdown()
@@ -116,6 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         namespace=args.namespace,
         disconnect_on_shutdown=True,  # this node made the client
         client_factory=partial(open_client, args.address, args.topicsport, args.servicesport),
+        shutdown_timeout=max(0.5, args.shutdown_timeout - 1.5),  # rospy's own unregistering comes after
     )
     try:
         if args.scene:
@@ -131,9 +182,25 @@ def main(argv: list[str] | None = None) -> int:
     log.info("bridges:\n%s", format_table(wrapper.bridges))
     while not stopping():
         time.sleep(0.1)
-    rospy.signal_shutdown(f"signal {stop[0]}" if stop else "shutdown requested")
+    rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")
     return 0
 
 
+def run() -> None:
+    """The script's entry: main(), then leave without interpreter finalisation.
+
+    pynng's atexit hook calls nng_fini, and nng aborts ("panic: pthread_mutex_lock") when a client thread
+    still holds a request, which is what a simulator frozen at shutdown leaves behind. By the time main
+    returns, ROS is shut down and the bridges are stopped; the logs are flushed and the process exits with
+    main's status directly.
+    """
+    code = main()
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -10,11 +10,13 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
+from airsim_mapper.resources import mapping_path
 
 __all__ = ["format_table", "load_and_expand", "main"]
 
@@ -26,7 +28,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="validate-mapping",
         description="Validate an airsim-mapper mapping YAML (and expand it over a scene).",
     )
-    parser.add_argument("mapping", help="the mapping YAML file, e.g. mappings/default.yaml")
+    parser.add_argument("mapping", help="the mapping YAML file, or a shipped mapping's name (default, enu)")
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
     parser.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
@@ -41,6 +43,12 @@ def _print_bridges(bridges: Sequence[BridgeSpec], fmt: str) -> None:
     else:
         print(format_table(bridges))
         print(f"\n{len(bridges)} bridges")
+
+
+def described(spec: str) -> str:
+    """The mapping as the user named it, with the file it resolved to when that is another path."""
+    path = mapping_path(spec)
+    return spec if path == Path(spec) else f"{spec} ({path})"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -59,7 +67,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(json.dumps(rows, indent=2))
             else:
                 print(format_rows(rows))
-                print(f"\n{args.mapping}: valid, {len(rows)} rules")
+                print(f"\n{described(args.mapping)}: valid, {len(rows)} rules")
             return EXIT_OK
         _, _, bridges = load_and_expand(
             args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace

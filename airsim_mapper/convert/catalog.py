@@ -8,10 +8,14 @@ Contract of an implementation (see registry.py):
 - sim_to_ros: ``fn(msg: dict, ctx: ConvertContext) -> ROS message`` (or None to publish nothing)
 - ros_to_sim: ``fn(ros_msg, ctx: ConvertContext) -> dict`` (sim topic message or service params)
 Converters raise ``ConversionError`` (airsim_mapper.convert.errors) for malformed input, nothing else.
+
+`markdown_table` renders the catalogue for people: `airsim-mapper converters` prints it, and the README's
+converter table is that output (a test keeps the two equal).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 SIM_TO_ROS = "sim_to_ros"
@@ -297,3 +301,22 @@ CONVERTERS: dict[str, ConverterInfo] = {
 
 def find(name: str) -> ConverterInfo | None:
     return CONVERTERS.get(name)
+
+
+DIRECTION_LABELS = {SIM_TO_ROS: "sim → ROS", ROS_TO_SIM: "ROS → sim"}
+TABLE_HEADERS = ("converter", "direction", "ROS types", "what it does")
+
+
+def markdown_table(converters: Iterable[ConverterInfo] | None = None) -> str:
+    """The converters (default: the whole catalogue, in its order) as a Markdown table, one row each."""
+    rows = [
+        (
+            f"`{info.name}`",
+            DIRECTION_LABELS[info.direction],
+            ", ".join(f"`{t}`" for t in info.ros_types),
+            info.summary.replace("|", "\\|"),
+        )
+        for info in (CONVERTERS.values() if converters is None else converters)
+    ]
+    lines = ["| " + " | ".join(TABLE_HEADERS) + " |", "|" + "---|" * len(TABLE_HEADERS)]
+    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in rows]) + "\n"

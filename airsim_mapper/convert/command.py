@@ -7,7 +7,9 @@
   "reject" any violation raises instead. Non-finite values are always rejected.
 - desired_pose / camera_desired_pose: quaternions must be finite and non-zero; one whose norm lies
   outside [QUAT_NORM_MIN, QUAT_NORM_MAX] is rejected as not meant to be a rotation, otherwise it is
-  normalised. header.frame_id must be empty or in params ``accepted_frames`` (default ["", "map"]).
+  normalised. The position must lie in limits.position_box (in the message's own convention), else it
+  is clamped into the box or rejected. header.frame_id must be empty or in params ``accepted_frames``
+  (default ["", "map"]).
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ QUAT_NORM_MIN = 0.5
 QUAT_NORM_MAX = 2.0
 DEFAULT_ACCEPTED_FRAMES = ("", "map")
 CAMERA_POSE_FRAME_ID = "DEFAULT_ID"
+MAX_SCENE_NAME = 4096  # characters: PATH_MAX
+SHOWN_NAME = 200  # characters of a refused name that a log line shows
 CLAMP = "clamp"
 REJECT = "reject"
 
@@ -63,7 +67,7 @@ def apply_limits(
             )
         velocity[2] = math.copysign(max_vz, velocity[2])
     max_speed = limits.max_linear_speed
-    speed = float(np.linalg.norm(velocity))
+    speed = math.hypot(*velocity)  # no overflow: np.linalg.norm squares 1e308 into inf
     if max_speed is not None and speed > max_speed:
         if mode == REJECT:
             raise ConversionError(
@@ -78,6 +82,36 @@ def apply_limits(
             )
         yaw_rate = math.copysign(max_yaw, yaw_rate)
     return velocity, yaw_rate
+
+
+def apply_position_box(position: np.ndarray, limits: Any, name: str) -> np.ndarray:
+    """Keep a commanded position inside limits.position_box: clamp it there or reject it."""
+    box = getattr(limits, "position_box", None)
+    if box is None:
+        return position
+    low, high = np.asarray(box.min, dtype=float), np.asarray(box.max, dtype=float)
+    if np.all((low <= position) & (position <= high)):
+        return position
+    if getattr(limits, "on_violation", CLAMP) == REJECT:
+        where = ", ".join(f"{v:g}" for v in position)
+        raise ConversionError(
+            f"{name}: position ({where}) is outside the position box "
+            f"[{', '.join(f'{v:g}' for v in low)}] .. [{', '.join(f'{v:g}' for v in high)}]"
+        )
+    return np.clip(position, low, high)
+
+
+def require_finite(params: Any, where: str = "params") -> None:
+    """Refuse a converted command holding a non-finite number anywhere (the last check before the
+    simulator): whatever a converter computed, inf or NaN never leaves the bridge."""
+    if isinstance(params, Mapping):
+        for key, value in params.items():
+            require_finite(value, f"{where}.{key}")
+    elif isinstance(params, (list, tuple)):
+        for index, value in enumerate(params):
+            require_finite(value, f"{where}[{index}]")
+    elif isinstance(params, (float, np.floating)) and not math.isfinite(params):
+        raise ConversionError(f"{where} is {params}: a command must hold finite numbers only")
 
 
 def _duration(ctx: ConvertContext) -> float:
@@ -132,9 +166,11 @@ def ros_quaternion(q: Any) -> np.ndarray:
     return wxyz / norm
 
 
-def _pose_in(msg: Any, ctx: ConvertContext) -> tuple[np.ndarray, np.ndarray]:
+def _pose_in(msg: Any, ctx: ConvertContext, name: str) -> tuple[np.ndarray, np.ndarray]:
     _check_frame(msg, ctx)
-    return _xyz(msg.pose.position, "position"), ros_quaternion(msg.pose.orientation)
+    position = _xyz(msg.pose.position, "position")
+    position = apply_position_box(position, getattr(ctx.options, "limits", None), name)
+    return position, ros_quaternion(msg.pose.orientation)
 
 
 def _xyz_map(v: np.ndarray) -> dict[str, float]:
@@ -148,7 +184,7 @@ def _wxyz_map(q: np.ndarray) -> dict[str, float]:
 @sim_fields.converter("desired_pose")
 def desired_pose(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
     """geometry_msgs/PoseStamped (world) -> sim PoseStamped {time_stamp: 0, position, orientation} in NED."""
-    position, q = _pose_in(msg, ctx)
+    position, q = _pose_in(msg, ctx, "desired_pose")
     if ctx.enu:
         position, q = frames.enu_to_ned(position), frames.enu_flu_to_ned_frd(q)
     return {"time_stamp": 0, "position": _xyz_map(position), "orientation": _wxyz_map(q)}
@@ -157,7 +193,7 @@ def desired_pose(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
 @sim_fields.converter("camera_desired_pose")
 def camera_desired_pose(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
     """PoseStamped relative to the robot body -> camera SetPose params (FRD; from FLU with ENU)."""
-    position, q = _pose_in(msg, ctx)
+    position, q = _pose_in(msg, ctx, "camera_desired_pose")
     if ctx.enu:
         position, q = frames.flu_to_frd(position), frames.flu_to_frd_rotation(q)
     return {
@@ -199,11 +235,23 @@ def set_bool(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
 
 @sim_fields.converter("load_scene")
 def load_scene(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
-    """std_msgs/String scene file name -> {"scene": name} (stripped; empty is an error)."""
+    """std_msgs/String scene file name -> {"scene": name} (stripped; empty is an error, and so is a name
+    longer than params ``max_length``, default MAX_SCENE_NAME: it is refused before it is logged)."""
     data = msg.data
     if not isinstance(data, str):
         raise ConversionError(f"load_scene: data must be a string, got {type(data).__name__}")
+    limit = ctx.params.get("max_length", MAX_SCENE_NAME)
+    if len(data) > limit:
+        raise ConversionError(
+            f"load_scene: the scene name {shorten(data)!r} is {len(data)} characters long; "
+            f"at most {limit} are accepted"
+        )
     scene = data.strip()
     if not scene:
         raise ConversionError("load_scene: the scene name is empty")
     return {"scene": scene}
+
+
+def shorten(text: str, keep: int = SHOWN_NAME) -> str:
+    """`text`, or its first `keep` characters and how many more there were (for log lines)."""
+    return text if len(text) <= keep else f"{text[:keep]}...({len(text) - keep} more)"

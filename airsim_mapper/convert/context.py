@@ -24,7 +24,7 @@ class ConvertContext:
     - convention: "ned" passes the simulator's NED/FRD data through; "enu" converts to REP-103
       (world ENU, body FLU).
     - stamp: "sim" stamps headers with the sim message's ``time_stamp`` (int ns); "ros" with ``now()``.
-    - now: returns a rospy.Time; used when stamp == "ros" (rospy.Time.now when None).
+    - now: the node's clock (rospy.Time.now in the engine); needed when stamp == "ros".
     - params: the rule's free-form converter parameters.
     - source: the scene element (capture setting + "camera_origin", sensor config, robot actor).
     - variables: the template variables of the bridge (robot_name, camera_name, ...).

@@ -4,7 +4,7 @@ Encodings: ``BGR`` -> bgr8 (the sim's buffer itself, no copy), ``PNG`` -> decode
 (float16 metres, the 1.1.0 depth format) -> 32FC1 metres, legacy ``16UC1`` (uint16 millimetres) -> 32FC1
 metres, ``GRAY8`` -> mono8, and the git server's ``32FC1`` (pixels in ``data`` or ``data_float``) -> 32FC1.
 ``data`` may be bytes (topic form), another bytes-like object, or a list of ints (GetImages form).
-float16 -> float32 uses OpenCV's SIMD conversion (bit-exact with numpy's astype, about ten times faster).
+float16 -> float32 uses OpenCV's SIMD conversion (bit-exact with numpy's astype, and faster).
 
 The result is a `BufferImage`: a sensor_msgs/Image whose ``data`` may be any byte buffer (bytes, or a
 memoryview of the received frame or of the converted pixels), written out as it is when published.
@@ -122,7 +122,7 @@ def _decode_png(data: Pixels, height: int, width: int) -> Pixels:
 
 @functools.lru_cache(maxsize=1)
 def _half_to_float() -> Callable[[np.ndarray], np.ndarray] | None:
-    """OpenCV's SIMD float16 -> float32 conversion (bit-exact, ~10x numpy's astype), if available."""
+    """OpenCV's SIMD float16 -> float32 conversion (bit-exact with numpy's astype, faster), if available."""
     try:
         import cv2
     except ImportError:  # pragma: no cover - cv2 comes with projectairsim

@@ -6,7 +6,8 @@ velocity are expressed in the child (body) frame, as nav_msgs/Odometry specifies
 convention, FLU with ENU. The first pose, and a pose whose stamp does not advance (paused clock), repeat
 the last twist (zero at first). Covariances are unknown (zeros).
 
-params: ``child_frame_id`` (template over the bridge's variables, e.g. ``<robot_name>/base_link``).
+params: ``child_frame_id`` (a template in the mapping, e.g. ``<robot_name>/base_link``, rendered when the
+rule is expanded).
 """
 
 from __future__ import annotations
@@ -25,7 +26,6 @@ from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.pose import ros_pose
 from airsim_mapper.convert.stamps import header, sim_stamp
 from airsim_mapper.geometry import Quat, Vec3, q_conjugate, q_mul, q_normalized, q_rotate
-from airsim_mapper.mapping.template import TemplateError, render
 
 ODOMETRY_KEY = "odometry"
 
@@ -68,10 +68,7 @@ def child_frame(ctx: ConvertContext) -> str:
     text = ctx.params.get("child_frame_id", "")
     if not isinstance(text, str):
         raise ConversionError(f"params.child_frame_id must be a string, got {text!r}")
-    try:
-        return render(text, ctx.variables)
-    except TemplateError as exc:
-        raise ConversionError(f"params.child_frame_id: {exc}") from None
+    return text
 
 
 @sim_fields.converter("odometry")

@@ -25,7 +25,7 @@ POINT_DTYPE = np.dtype(
     [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"), ("segmentation", "<i4")]
 )
 _ROS_TYPES = {np.dtype("<f4"): PointField.FLOAT32, np.dtype("<i4"): PointField.INT32}
-_ARRAY_CODES = {"<f4": ("f", np.float32), "<i4": ("i", np.intc)}  # array.array packs lists ~20% faster
+_ARRAY_CODES = {"<f4": ("f", np.float32), "<i4": ("i", np.intc)}  # array.array packs lists faster
 
 
 def point_fields() -> list[PointField]:

@@ -9,9 +9,8 @@ from typing import Any
 
 from airsim_mapper.convert.catalog import CONVERTERS
 from airsim_mapper.convert.errors import ConverterNotFound
-from airsim_mapper.convert.stamps import convert_stamp
 
-__all__ = ["convert_stamp", "get"]
+__all__ = ["get"]
 
 _CACHE: dict[str, Callable[..., Any]] = {}
 

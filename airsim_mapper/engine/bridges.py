@@ -12,6 +12,7 @@ from typing import Any
 import rospy
 
 from airsim_mapper.convert import registry
+from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.hub import StreamHub
@@ -219,6 +220,7 @@ class RosToSim(Bridge):
     def on_message(self, ros_msg: Any) -> None:
         try:
             params = self.convert(ros_msg, self.ctx)
+            require_finite(params)
         except ConversionError as exc:
             self.fail(f"rejected a message on {self.spec.ros}: {exc}")
             return
@@ -252,15 +254,10 @@ class RosToSim(Bridge):
             self._remember_camera_pose(params)
 
     def _remember_camera_pose(self, params: dict) -> None:
-        import numpy as np
+        from airsim_mapper.convert.pose import camera_pose_key, camera_pose_override
 
-        pose = params["pose"]
-        t, r = pose["translation"], pose["rotation"]
-        key = ("camera_pose", self.spec.variables.get("robot_name"), self.spec.variables.get("camera_name"))
-        self.services.shared[key] = (
-            np.array([t["x"], t["y"], t["z"]], dtype=float),
-            np.array([r["w"], r["x"], r["y"], r["z"]], dtype=float),
-        )
+        key = camera_pose_key(self.spec.variables.get("robot_name"), self.spec.variables.get("camera_name"))
+        self.services.shared[key] = camera_pose_override(params)
 
     def check_watchdog(self, now: float) -> None:
         """Stop the robot when commands stopped arriving for `watchdog_s` seconds."""
@@ -307,6 +304,7 @@ class RosService(Bridge):
         response = self._response()
         try:
             params = self.convert(request, self.ctx)
+            require_finite(params)
             if self.spec.converter == "trigger_all":
                 return self._on_all_robots(response, params)
             result = self.services.sim.call(self.spec.sim, params)

@@ -4,9 +4,12 @@ Data flows one way: scene + mapping --expand--> BridgeSpecs --build--> runners w
 the ROS link. A scene change tears the scene's runners down and builds the new scene's; bridges that do
 not depend on the scene (load_scene itself) keep running.
 
-Simulator loss (health.py decides): the link is abandoned at once (its calls fail fast, its sockets are
-closed so a restarted server's single topics connection is free), the status topic says "stale", and
-robots are no longer considered moving. If the engine may make clients (`client_factory`), it reconnects
+Simulator loss (health.py decides; only a closed connection is a loss): the link is abandoned at once
+(its calls fail fast, its sockets are closed so a restarted server's single topics connection is free),
+the status topic says "stale", and robots are no longer considered moving. A simulator that stops
+answering on an open connection is only reported stale ("unresponsive") until it answers again: nothing
+is reloaded, because it still has its scene. The status topic is published by a thread of its own, at
+its rate, whatever the simulator does. If the engine may make clients (`client_factory`), it reconnects
 with backoff: a new client, the last scene reloaded, and the same streams re-subscribed on the new link,
 so ROS publishers, subscribers and their peers never notice more than a pause. A client supplied by a
 mission script is never replaced behind its owner's back: the engine only reports "stale" until the
@@ -15,6 +18,9 @@ script loads or adopts a scene again.
 
 from __future__ import annotations
 
+import contextlib
+import copy
+import functools
 import gc
 import logging
 import queue
@@ -24,8 +30,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from airsim_mapper.convert.command import shorten
 from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
-from airsim_mapper.engine.health import PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
+from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import TfBroadcaster
@@ -40,10 +47,39 @@ log = logging.getLogger("rosout.airsim_mapper.engine")
 WATCHDOG_PERIOD_S = 0.05
 STATUS_PERIOD_S = 1.0
 RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)
+MAX_QUEUED_SCENES = 8  # load_scene requests waiting for the scene-loader thread
+REFUSALS_LOGGED, REFUSALS_PERIOD_S = 10, 10.0  # at most this many refused loads logged per period
+SHOWN_LINE = 300  # characters of an error line a refusal log shows
+SHUTDOWN_TIMEOUT_S = 5.0  # shutdown's total budget; the simulator gets at most UNSUBSCRIBE_TIMEOUT_S of it
+UNSUBSCRIBE_TIMEOUT_S = 2.0
 
 
 class EngineError(RuntimeError):
     """The engine cannot do what was asked right now (the message says why)."""
+
+
+class LogBudget:
+    """Warnings limited to `count` per `period` seconds; the next one logged says how many were held back."""
+
+    def __init__(self, logger: logging.Logger, count: int, period: float) -> None:
+        self.logger, self.count, self.period = logger, count, period
+        self._window_start = -1e9
+        self._logged = 0
+        self._held = 0
+        self._lock = threading.Lock()
+
+    def warn(self, message: str) -> None:
+        with self._lock:
+            now = time.monotonic()
+            if now - self._window_start >= self.period:
+                self._window_start, self._logged = now, 0
+            if self._logged >= self.count:
+                self._held += 1
+                return
+            self._logged += 1
+            held, self._held = self._held, 0
+        suffix = f" ({held} more not logged before this one)" if held else ""
+        self.logger.error("%s%s", message, suffix)
 
 
 class Engine:
@@ -56,7 +92,7 @@ class Engine:
         sim_config_path: str | Path,
         node_name: str,
         namespace: str = "",
-        load_world: Callable[[Any, str, str], Any] | None = None,
+        load_world: Callable[[Any, Scene, str], Any] | None = None,
         client_factory: Callable[[], Any] | None = None,
     ) -> None:
         tune_process()
@@ -77,19 +113,22 @@ class Engine:
         self.world: Any = None
         self._load_world = load_world or _load_world
         self._lock = threading.RLock()
-        self._scene_requests: queue.Queue[str | None] = queue.Queue()
+        self._scene_requests: queue.Queue[str | None] = queue.Queue(MAX_QUEUED_SCENES)
+        self._loading: str | None = None  # the scene file being loaded by the scene-loader thread
+        self._refusals = LogBudget(log, REFUSALS_LOGGED, REFUSALS_PERIOD_S)
         self._running = True
         self._client_factory = client_factory
         self.state = CONNECTED
         self.reason = ""
-        self.counters = {"sim_losses": 0, "reconnects": 0}
+        self.counters = {"sim_losses": 0, "reconnects": 0, "stalls": 0}
+        self._stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self._stopping = threading.Event()
         self._status = StatusPublisher(node_name)
-        self._status_hooks: list[Callable[[dict], None]] = []
         self._threads = [
             threading.Thread(target=self._watchdog_loop, name="watchdog", daemon=True),
             threading.Thread(target=self._scene_loop, name="scene-loader", daemon=True),
             threading.Thread(target=self._health_loop, name="sim-health", daemon=True),
+            threading.Thread(target=self._status_loop, name="status", daemon=True),
         ]
         for thread in self._threads:
             thread.start()
@@ -143,7 +182,7 @@ class Engine:
             self.hub.drop_all()
             self.sim.forget_all()
             try:
-                self.world = self._load_world(self.client, scene_file, self.sim_config_path)
+                self.world = self._load_world(self.client, scene, self.sim_config_path)
             except Exception:
                 if self.scene is not None:
                     log.error("loading %s failed; restoring the bridges of %s", scene_file, self.scene.file)
@@ -164,20 +203,44 @@ class Engine:
             self.apply(scene)
 
     def request_scene(self, scene_file: str) -> None:
-        """Queue a scene load (from a ROS callback); it runs on the scene-loader thread."""
-        self._scene_requests.put(scene_file)
+        """Queue a scene load (from a ROS callback); it runs on the scene-loader thread. At most
+        MAX_QUEUED_SCENES wait; a request beyond that is refused (EngineError) and logged."""
+        loading = self._loading
+        try:
+            self._scene_requests.put_nowait(scene_file)
+        except queue.Full:
+            self._refusals.warn(
+                f"load_scene {shorten(scene_file)!r} refused: {MAX_QUEUED_SCENES} loads are already waiting"
+                + (f" behind {shorten(loading)!r}" if loading else "")
+            )
+            raise EngineError(f"{MAX_QUEUED_SCENES} scene loads are already waiting") from None
+        if loading is not None:
+            log.info(
+                "load_scene %r queued behind %r (%d waiting)",
+                shorten(scene_file),
+                shorten(loading),
+                self._scene_requests.qsize(),
+            )
 
     def _scene_loop(self) -> None:
         while True:
             scene_file = self._scene_requests.get()
-            if scene_file is None:
+            if scene_file is None or not self._running:
                 return
+            self._loading = scene_file
             try:
                 self.load_scene(scene_file)
             except ConfigError as exc:
-                log.error("load_scene %r refused; the current scene stays:\n%s", scene_file, exc)
+                report = "\n".join(shorten(line, SHOWN_LINE) for line in str(exc).splitlines())
+                self._refusals.warn(
+                    f"load_scene {shorten(scene_file)!r} refused; the current scene stays:\n{report}"
+                )
             except Exception as exc:
-                log.error("load_scene %r failed: %s", scene_file, exc)
+                self._refusals.warn(
+                    f"load_scene {shorten(scene_file)!r} failed: {shorten(str(exc), SHOWN_LINE)}"
+                )
+            finally:
+                self._loading = None
 
     def _node_action(self, spec: BridgeSpec, params: dict) -> None:
         if spec.converter == "load_scene":
@@ -202,40 +265,71 @@ class Engine:
 
     def _health_loop(self) -> None:
         check, backoff = HealthCheck(), Backoff()
-        next_attempt = next_status = 0.0
+        next_attempt = 0.0
         while self._running:
             now = time.monotonic()
-            if self.state == CONNECTED:
+            if self.state == CONNECTED or self._stalled_since is not None:
                 self.sim.ensure_receiver()
-                reason = check.check(self.sim)
-                if reason is not None and self._running:
-                    self.sim_lost(reason)
+                verdict = check.check(self.sim)
+                if not self._running:
+                    break
+                if verdict.kind == LOST:
+                    self.sim_lost(verdict.reason)
                     backoff.reset()
                     next_attempt = time.monotonic() + backoff.next_delay()
-                    next_status = 0.0
+                elif verdict.kind == OK:
+                    self._answering()
+                else:
+                    self._stalled(verdict.reason)
             elif self._client_factory is not None and now >= next_attempt and self._running:
                 failure = self._reconnect()
                 if failure is None:
                     check.reset()
                     backoff.reset()
-                    next_status = 0.0
                 else:
                     attempt, delay = backoff.attempt, backoff.next_delay()
                     next_attempt = time.monotonic() + delay
                     log.warning("reconnect attempt %d: %s; next in %.1f s", attempt, failure, delay)
-            if time.monotonic() >= next_status:
-                self.publish_status()
-                next_status = time.monotonic() + STATUS_PERIOD_S
             wait = PROBE_PERIOD_S
-            if self.state != CONNECTED:
+            if self.state != CONNECTED and self._stalled_since is None:
                 wait = min(wait, max(0.02, next_attempt - time.monotonic()))
             self._stopping.wait(wait)
+
+    def _status_loop(self) -> None:
+        while not self._stopping.wait(STATUS_PERIOD_S):
+            self.publish_status()
+
+    def _stalled(self, reason: str) -> None:
+        """The simulator stopped answering on an open connection: stale, but nothing is torn down."""
+        with self._lock:
+            if self.state != CONNECTED:
+                return
+            self.state, self.reason = STALE, f"unresponsive: {reason}"
+            self._stalled_since = time.monotonic()
+            self.counters["stalls"] += 1
+        log.error("simulator not answering (%s); topics are stale; waiting for it", reason)
+        self.publish_status()
+
+    def _answering(self) -> None:
+        """A probe was answered: an unresponsive simulator is back, on the same connection and scene."""
+        with self._lock:
+            since = self._stalled_since
+            if since is None:
+                return
+            self._stalled_since = None
+            self.state, self.reason = CONNECTED, ""
+        log.warning(
+            "simulator answers again after %.1f s; its scene kept running, nothing reloaded",
+            time.monotonic() - since,
+        )
+        self.publish_status()
 
     def sim_lost(self, reason: str) -> None:
         """Mark the link lost: nothing more is sent on it; robots are no longer driven."""
         with self._lock:
-            if self.state != CONNECTED:
+            if self.state != CONNECTED and self._stalled_since is None:
                 return
+            self._stalled_since = None
             self.state, self.reason = STALE, reason
             self.counters["sim_losses"] += 1
             for bridge in list(self.bridges.values()):
@@ -250,27 +344,30 @@ class Engine:
         self.publish_status()
 
     def _reconnect(self) -> str | None:
-        """One attempt: new client, last scene reloaded, streams moved over. None on success, else why not."""
+        """One attempt: new client, last scene reloaded, streams moved over. None on success, else why not.
+
+        The scene is loaded on the new client before anything is swapped, without the engine's lock, so a
+        slow simulator never holds up status, scene requests or shutdown."""
         try:
             client = self._client_factory()
         except SimUnreachable as exc:
             return str(exc)
         start = time.monotonic()
+        scene = self.scene
+        link = SimLink(client)  # first, so the scene load already uses the link's receive loop
+        guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
+        guard.start()
+        try:
+            world = self._load_world(client, scene, self.sim_config_path) if scene else None
+        except Exception as exc:
+            link.abandon()
+            return f"reloading {scene.file if scene else 'the scene'} failed: {type(exc).__name__}: {exc}"
+        finally:
+            guard.cancel()
         with self._lock:
-            if not self._running:
-                close_client(client)
-                return "shutting down"
-            scene = self.scene
-            link = SimLink(client)  # first, so the scene load already uses the link's receive loop
-            guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
-            guard.start()
-            try:
-                world = self._load_world(client, scene.file, self.sim_config_path) if scene else None
-            except Exception as exc:
+            if not self._running or self.scene is not scene:
                 link.abandon()
-                return f"reloading {scene.file if scene else 'the scene'} failed: {type(exc).__name__}: {exc}"
-            finally:
-                guard.cancel()
+                return "shutting down" if not self._running else "the scene changed meanwhile"
             old = self.sim
             self.shared.clear()
             self._swap_link(link, client, world)
@@ -286,10 +383,6 @@ class Engine:
         return None
 
     # --- status -----------------------------------------------------------------------------
-    def add_status_hook(self, hook: Callable[[dict], None]) -> None:
-        """Call `hook(status)` whenever the status is published (diagnostics, tests)."""
-        self._status_hooks.append(hook)
-
     def status(self) -> dict[str, Any]:
         """The node's state, its counters and the statistics of every simulator stream."""
         now = time.monotonic()
@@ -323,11 +416,6 @@ class Engine:
             self._status.publish(status)
         except Exception as exc:  # rospy shutting down
             log.debug("status not published: %s", exc)
-        for hook in list(self._status_hooks):
-            try:
-                hook(status)
-            except Exception:
-                log.exception("status hook failed")
 
     # --- watchdog and shutdown --------------------------------------------------------------
     def _watchdog_loop(self) -> None:
@@ -341,32 +429,71 @@ class Engine:
                         log.exception("watchdog of %s failed", bridge.spec.name)
             time.sleep(WATCHDOG_PERIOD_S)
 
-    def shutdown(self) -> None:
-        """Stop every bridge (robots with a running velocity command are stopped) and the link."""
+    def shutdown(self, timeout: float = SHUTDOWN_TIMEOUT_S, client_topics: bool = False) -> bool:
+        """Stop every bridge (robots with a running velocity command are stopped) and the link, within
+        `timeout` seconds whatever the simulator does: the server is told to unsubscribe in one request,
+        which gets what is left of the budget (at most UNSUBSCRIBE_TIMEOUT_S). With `client_topics` the
+        client's own subscriptions go too (its owner closes it next). False if the simulator did not
+        answer."""
+        end = time.monotonic() + timeout
         self._running = False
         self._stopping.set()
-        self._scene_requests.put(None)
-        with self._lock:
+        with contextlib.suppress(queue.Full):  # a full queue's loader sees _running false after its load
+            self._scene_requests.put_nowait(None)
+        self.sim.begin_close()  # unsubscribes are collected, sent once below
+        locked = self._lock.acquire(timeout=max(0.0, (end - time.monotonic()) / 2))
+        try:
             for name, bridge in list(self.bridges.items()):
                 try:
                     bridge.stop()
                 except Exception:
                     log.exception("stopping %s failed", name)
             self.bridges.clear()
+        finally:
+            if locked:
+                self._lock.release()
         time.sleep(0.1)  # let the last stop commands leave
-        self.sim.close()
+        budget = min(UNSUBSCRIBE_TIMEOUT_S, max(0.1, end - time.monotonic() - 0.5))
+        answered = self.sim.close(timeout=budget, client_topics=client_topics)
         self.hub.drop_all()
         self.state = STOPPED
         self.publish_status()
         self._status.close()
         self.gc_pauses.close()
+        return answered
 
 
 def _scene_independent(spec: BridgeSpec) -> bool:
     return "scene_name" not in spec.variables
 
 
-def _load_world(client: Any, scene_file: str, sim_config_path: str) -> Any:
+def _load_world(client: Any, scene: Scene, sim_config_path: str) -> Any:
+    """A projectairsim World on `scene` as it was validated (`Scene.config`): no file is read again."""
+    return validated_world_class()(client, scene, sim_config_path)
+
+
+@functools.cache
+def validated_world_class() -> type:
+    """The World subclass `_load_world` uses (made on first use: projectairsim is imported lazily)."""
     from projectairsim import World
 
-    return World(client, scene_file, sim_config_path=sim_config_path.rstrip("/") + "/")
+    class ValidatedWorld(World):
+        """World.__init__ of projectairsim 1.1.0 step for step, except that the scene dict is the one
+        read_scene validated instead of whatever the file holds now (it may have been edited, or replaced
+        by a symlink out of the config directory, since)."""
+
+        def __init__(self, client: Any, scene: Scene, sim_config_path: str) -> None:
+            self.client = client
+            self.sim_config_path = sim_config_path.rstrip("/") + "/"
+            self.sim_instance_idx = -1
+            self.parent_topic = "/Sim/SceneBasicDrone"
+            self.sim_config = None
+            self.home_geo_point = None
+            self.scene_config_path = str(Path(scene.config_dir) / scene.file)
+            self.robot_config_paths: list[str] = []
+            self.envactor_config_paths: list[str] = []
+            self.load_scene(copy.deepcopy(dict(scene.config)), delay_after_load_sec=0)
+            zeros = [0, 0]
+            self.import_ned_trajectory("null_trajectory", [0, 1], zeros, zeros, zeros, zeros, zeros, zeros)
+
+    return ValidatedWorld

@@ -1,45 +1,25 @@
-"""Fast topic frames: heavy simulator messages decoded straight into numpy, on the client's own socket.
+"""Fast decoding of large topic frames: msgpack float/int arrays straight into numpy.
 
-The 1.1.0 client unpacks every topic frame with msgpack on its one receive thread, and msgpack turns each
-float array (lidar clouds, `data_float`) into a Python list: 17-25 ms for a 100k-point scan. This module
-keeps the client's connection, protocol and receive thread, and changes only what `recv()` returns:
-
-- `install(client, heavy)` replaces `client.socket_topics` with a `RecvProxy` around the real socket.
-  Everything but `recv` (send, close, dial, options) goes to the real socket unchanged.
-- `RecvProxy.recv()` reads the real frame and peeks at its header. A MESSAGE frame whose body is large and
-  whose topic `heavy(topic)` accepts (the engine answers: only the bridge's own callbacks listen, so no
-  mission-script callback can see a rewritten frame) has its body decoded here: large msgpack float/int
-  arrays (0xdc/0xdd + one type byte and a fixed-width big-endian value per element) become numpy arrays
-  through a strided view, after every element's type byte is checked vectorially; large bin/str values
-  are sliced once; every other value goes through msgpack itself. The proxy then returns a small frame
-  `[2, topic, {"__fast__": key}]` and keeps the decoded dict in a side table. Anything unusual, and every
-  other frame, passes through byte for byte.
-- `FastFrames.resolve(message)` swaps such a placeholder for its decoded dict (any other message is
-  returned as it is). Entries that are never resolved (a dropped frame, a client-side reliability drop)
-  expire after `ttl_s`, and at most `per_topic` entries wait per topic, so the table stays bounded.
-
-Decoded dicts equal what the client would have produced, except that large numeric arrays are numpy
-arrays (float32 arrays stay float32) instead of lists. The converters accept both.
+The 1.1.0 client unpacks every topic frame with msgpack, which turns each float array (lidar clouds,
+`data_float`) into a Python list of floats, element by element. `decode_map` decodes a frame body instead:
+large msgpack float/int arrays (0xdc/0xdd + one type byte and a fixed-width big-endian value per element)
+become numpy arrays through a strided view, after every element's type byte is checked vectorially; large
+bin/str values are sliced once (as memoryviews of the frame with `views`); every other value goes through
+msgpack itself. Anything it does not recognise returns None, and the caller decodes the body as the client
+would. Decoded dicts equal the client's, except that large numeric arrays are numpy arrays (float32 stays
+float32) instead of lists; the converters accept both.
 """
 
 from __future__ import annotations
 
-import contextlib
 import io
-import itertools
-import threading
-import time
-from collections import OrderedDict, deque
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import msgpack
 import numpy as np
 
-FAST_KEY = "__fast__"
 MESSAGE_FRAME = 2
-DEFAULT_MIN_BYTES = 32 * 1024  # smaller bodies unpack in microseconds: not worth rewriting
 MIN_ARRAY_ELEMENTS = 64  # shorter arrays go through msgpack
 MIN_SLICE_BYTES = 1024  # shorter bin/str values go through msgpack
 READ_SIZE = 16 * 1024  # msgpack read-ahead for ordinary values
@@ -57,35 +37,6 @@ TYPED_ELEMENTS: dict[int, tuple[str, str]] = {
     0xD2: (">i4", "<i4"),
     0xD3: (">i8", "<i8"),
 }
-
-
-class FastFramesError(RuntimeError):
-    """Fast frames could not be installed or a placeholder could not be resolved."""
-
-
-class NotConnectedError(FastFramesError):
-    def __init__(self) -> None:
-        super().__init__("fast frames: the client has no topics socket; call client.connect() first")
-
-
-class ExpiredFrameError(FastFramesError):
-    def __init__(self, key: int) -> None:
-        super().__init__(f"fast frames: frame {key} expired or was already resolved")
-        self.key = key
-
-
-@dataclass
-class FastStats:
-    frames: int = 0  # frames read from the socket
-    fast: int = 0  # frames decoded here and replaced by a placeholder
-    fast_bytes: int = 0  # body bytes of those frames
-    passthrough: int = 0  # frames returned byte for byte
-    fallback: int = 0  # heavy frames whose body this module does not decode (returned as they are)
-    resolved: int = 0  # placeholders swapped for their message
-    expired: int = 0  # side-table entries dropped unresolved (age or per-topic cap)
-
-
-# ---------------------------------------------------------------------------------------- pure decoding
 
 
 @dataclass(frozen=True)
@@ -232,173 +183,3 @@ def decode_map(
         if pos > end:
             return None
     return out if pos == end else None
-
-
-def placeholder_frame(topic: str, key: int) -> bytes:
-    """The small frame handed to the client instead of a decoded one."""
-    return msgpack.packb(
-        [MESSAGE_FRAME, topic, msgpack.packb({FAST_KEY: key}, use_bin_type=True)], use_bin_type=True
-    )
-
-
-def placeholder_key(message: Any) -> int | None:
-    """The side-table key of a placeholder message, or None for any other message."""
-    if type(message) is dict and len(message) == 1:
-        key = message.get(FAST_KEY)
-        if isinstance(key, int):
-            return key
-    return None
-
-
-# ---------------------------------------------------------------------------------------- the side table
-
-
-@dataclass
-class _Entry:
-    topic: str
-    deadline: float
-    message: dict[str, Any]
-
-
-@dataclass
-class FastFrames:
-    """Rewrites heavy frames and resolves their placeholders; thread-safe and bounded."""
-
-    heavy: Callable[[str], bool]
-    min_bytes: int = DEFAULT_MIN_BYTES
-    ttl_s: float = 2.0
-    per_topic: int = 4
-    views: bool = False  # large bin values as memoryviews of the frame (for consumers that accept them)
-    stats: FastStats = field(default_factory=FastStats)
-
-    def __post_init__(self) -> None:
-        self._lock = threading.Lock()
-        self._entries: OrderedDict[int, _Entry] = OrderedDict()
-        self._by_topic: dict[str, deque[int]] = {}
-        self._keys = itertools.count(1)
-        self._client: Any = None
-        self._real: Any = None
-
-    # -- receive side (the client's receive thread)
-
-    def rewrite(self, frame: bytes) -> bytes:
-        """The frame the client should see: a placeholder for a decoded heavy frame, else `frame`."""
-        self.stats.frames += 1
-        header = parse_frame_header(frame)
-        if (
-            header is None
-            or header.frame_type != MESSAGE_FRAME
-            or header.body_end - header.body_start < self.min_bytes
-            or not self._is_heavy(header.topic)
-        ):
-            self.stats.passthrough += 1
-            return frame
-        try:
-            message = decode_map(frame, header.body_start, header.body_end, self.views)
-        except Exception:  # malformed body: the client's own path reports it as it always did
-            message = None
-        if message is None:
-            self.stats.fallback += 1
-            return frame
-        key = self._store(header.topic, message)
-        self.stats.fast += 1
-        self.stats.fast_bytes += header.body_end - header.body_start
-        return placeholder_frame(header.topic, key)
-
-    def _is_heavy(self, topic: str) -> bool:
-        try:
-            return bool(self.heavy(topic))
-        except Exception:
-            return False
-
-    def _store(self, topic: str, message: dict[str, Any]) -> int:
-        now = time.monotonic()
-        with self._lock:
-            key = next(self._keys)
-            self._entries[key] = _Entry(topic, now + self.ttl_s, message)
-            keys = self._by_topic.setdefault(topic, deque())
-            keys.append(key)
-            while len(keys) > self.per_topic:
-                self._drop(keys.popleft())
-            self._expire(now)
-        return key
-
-    def _drop(self, key: int) -> None:
-        if self._entries.pop(key, None) is not None:
-            self.stats.expired += 1
-
-    def _expire(self, now: float) -> None:
-        while self._entries:
-            key, entry = next(iter(self._entries.items()))
-            if entry.deadline > now:
-                return
-            self._entries.popitem(last=False)
-            self.stats.expired += 1
-            keys = self._by_topic.get(entry.topic)
-            if keys and keys[0] == key:
-                keys.popleft()
-
-    # -- consumer side (any thread)
-
-    def resolve(self, message: Any) -> Any:
-        """The decoded message behind a placeholder (taken from the table); other messages unchanged."""
-        key = placeholder_key(message)
-        if key is None:
-            return message
-        with self._lock:
-            entry = self._entries.pop(key, None)
-            if entry is None:
-                raise ExpiredFrameError(key)
-            keys = self._by_topic.get(entry.topic)
-            if keys is not None:
-                with contextlib.suppress(ValueError):
-                    keys.remove(key)
-                if not keys:
-                    del self._by_topic[entry.topic]
-            self.stats.resolved += 1
-        return entry.message
-
-    def pending(self) -> int:
-        """Entries waiting to be resolved."""
-        with self._lock:
-            self._expire(time.monotonic())
-            return len(self._entries)
-
-    # -- installation
-
-    def uninstall(self) -> None:
-        """Give the client its real socket back (pending placeholders can still be resolved)."""
-        client, real = self._client, self._real
-        if client is not None and isinstance(client.socket_topics, RecvProxy):
-            client.socket_topics = real
-        self._client = self._real = None
-
-
-class RecvProxy:
-    """Stands in for the client's topics socket: `recv` goes through FastFrames, the rest is forwarded."""
-
-    def __init__(self, real: Any, fast: FastFrames) -> None:
-        object.__setattr__(self, "_real", real)
-        object.__setattr__(self, "_fast", fast)
-
-    def recv(self, *args: Any, **kwargs: Any) -> bytes:
-        return self._fast.rewrite(self._real.recv(*args, **kwargs))
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._real, name)
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        setattr(self._real, name, value)
-
-
-def install(client: Any, heavy: Callable[[str], bool], **options: Any) -> FastFrames:
-    """Put a RecvProxy on the client's topics socket (idempotent: a second call returns the first)."""
-    socket = client.socket_topics
-    if isinstance(socket, RecvProxy):
-        return socket._fast
-    if socket is None:
-        raise NotConnectedError()
-    fast = FastFrames(heavy, **options)
-    fast._client, fast._real = client, socket
-    client.socket_topics = RecvProxy(socket, fast)
-    return fast

@@ -1,10 +1,10 @@
 """Simulator liveness: opening a client, backoff between attempts, and deciding that a link is lost.
 
-A server that is killed or restarted closes its TCP connections, which NNG reports as a pipe removal on
-the topics socket: the link notices that at once (SimLink.connected). A server that hangs keeps its
-connections; `HealthCheck` then counts unanswered probes and calls the link lost after a few in a row.
-Probes are deliberately tolerant (1 s timeout, 3 misses) because a false "lost" makes the node reload
-the scene, which resets the simulation.
+A server that is killed or restarted closes its TCP connections, which NNG reports as a pipe removal:
+the link notices that at once (SimLink.connected), and only then is the link lost (the node reconnects
+and reloads the scene). A server that stalls (stopped, swapping, stuck in a long frame) keeps its
+connections and its scene; `HealthCheck` then calls it unresponsive after a few unanswered probes in a
+row, and answering again after that, without any reload: reloading would reset the simulation.
 """
 
 from __future__ import annotations
@@ -22,6 +22,17 @@ RETRY_STEPS: tuple[tuple[int, float], ...] = (
     (30, 2.0),  # the next ~40 s
     (1 << 30, 5.0),  # then one attempt (and one log line) per 5 s
 )
+
+
+OK, UNRESPONSIVE, LOST = "ok", "unresponsive", "lost"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What a health check concluded: OK, UNRESPONSIVE (connection open, no answers) or LOST."""
+
+    kind: str
+    reason: str = ""
 
 
 class SimUnreachable(ConnectionError):
@@ -75,22 +86,23 @@ class Backoff:
 
 @dataclass
 class HealthCheck:
-    """Turns per-period observations of a link into a verdict: None (healthy) or why it is lost."""
+    """Turns per-period observations of a link into a Verdict."""
 
-    misses_to_lose: int = PROBE_MISSES
+    misses_to_stall: int = PROBE_MISSES
     probe_timeout: float = PROBE_TIMEOUT_S
     misses: int = 0
 
-    def check(self, link: Probed) -> str | None:
+    def check(self, link: Probed) -> Verdict:
         if not link.connected():
-            return "the simulator closed the connection"
+            return Verdict(LOST, "the simulator closed the connection")
         if link.probe(self.probe_timeout):
             self.misses = 0
-            return None
+            return Verdict(OK)
         self.misses += 1
-        if self.misses >= self.misses_to_lose:
-            return f"no answer to {self.misses} probes of {self.probe_timeout:g} s"
-        return None
+        if self.misses >= self.misses_to_stall:
+            why = f"no answer to {self.misses} probes of {self.probe_timeout:g} s; the connection is open"
+            return Verdict(UNRESPONSIVE, why)
+        return Verdict(OK)
 
     def reset(self) -> None:
         self.misses = 0

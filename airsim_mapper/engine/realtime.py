@@ -6,7 +6,8 @@ socket takes the message at once, instead of waking a writer thread and yielding
 publish. `freeze_heap` keeps the objects of a running scene out of full collections, and `GcPauses`
 reports the longest garbage collection for the status topic.
 
-The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns them off for comparison.
+The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns off the thread settings and
+prompt publishing for comparison (the heap is frozen either way).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ class PromptQueuedConnection(QueuedConnection):
     rospy hands every message to the connection's writer thread and then calls `time.sleep(0)`. Each
     handoff wakes a thread that must take the GIL before it can send, and the yield gives the GIL away
     once per publish and subscriber; with busy threads in the process a pose that fans out to six topics
-    waited tens of milliseconds between its own publishes (see the README's reliability section).
+    waited for the GIL between its own publishes (docs/reliability.md has the measurements).
 
     Here, when nothing is queued or being sent, `write_data` offers the message to the socket without
     blocking (MSG_DONTWAIT). A message the socket takes whole is done; no thread wakes. If the socket
@@ -104,9 +105,9 @@ def tune_process() -> None:
 def freeze_heap() -> float:
     """Collect once, then move every surviving object out of the collector's sight; the time in ms.
 
-    A full collection stops every thread for as long as it takes to walk all tracked objects: about
-    70,000 after the bridge's imports alone, 29 ms on this machine and 52 ms seen on a slow stretch, in
-    the middle of the pose path. After `gc.freeze()` later collections walk only what was made since.
+    A full collection stops every thread for as long as it takes to walk all tracked objects, tens of
+    thousands after the bridge's imports alone, in the middle of the pose path (docs/reliability.md has
+    the measured pauses). After `gc.freeze()` later collections walk only what was made since.
     """
     started = time.perf_counter()
     gc.collect()

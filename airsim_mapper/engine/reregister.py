@@ -1,7 +1,9 @@
 """Surviving a ROS master restart: rospy registers a node with the master only once, at start.
 
 A restarted master knows nothing of the node, so its topics and services go deaf for every peer that
-appears afterwards. `MasterWatch` polls the master's pid once a second; when it changes, `register_all`
+appears afterwards. `MasterWatch` asks the master once a second whether it knows this node
+(`lookupNode`); a master that answers but does not know it is a new master, whatever its pid (in a
+container every rosmaster has the same pid). A changed pid counts too. Then `register_all`
 repeats what rospy's RegManager does at start-up: every publication, subscription and service of this
 process is registered again with the node's XML-RPC URI, and each subscription is told its current
 publishers (through the node's own `publisherUpdate`, exactly as the master would tell it).
@@ -74,8 +76,22 @@ def master_pid(master_uri: str, caller_id: str) -> int | None:
         return None
 
 
+def knows_node(master_uri: str, caller_id: str, node_uri: str) -> bool | None:
+    """Whether the master has `caller_id` registered at `node_uri`; None when it does not answer.
+
+    A node with any publication, subscription or service (every rospy node publishes /rosout) is known
+    to the master it registered with; a restarted master answers "unknown node".
+    """
+    try:
+        code, _message, uri = xmlrpc.client.ServerProxy(master_uri).lookupNode(caller_id, caller_id)
+    except Exception:
+        return None
+    return code == 1 and uri == node_uri
+
+
 class MasterWatch:
-    """A thread that re-registers this node whenever the master's pid changes."""
+    """A thread that re-registers this node whenever a new master answers (it does not know the node,
+    or its pid changed)."""
 
     def __init__(
         self, period: float = POLL_PERIOD_S, on_reregistered: Callable[[Registered], None] | None = None
@@ -93,10 +109,20 @@ class MasterWatch:
         self._thread = threading.Thread(target=self._run, name="master-watch", daemon=True)
         self._thread.start()
 
+    def _new_master(self) -> int | None:
+        """The pid of a master that needs our registrations, or None (no answer, or it has them)."""
+        known = knows_node(self.master_uri, self.caller_id, self.node_uri)
+        if known is None:
+            return None
+        pid = master_pid(self.master_uri, self.caller_id)
+        if pid is None or (known and pid == self._pid):
+            return None
+        return pid
+
     def _run(self) -> None:
         while not self._stop.wait(self.period):
-            pid = master_pid(self.master_uri, self.caller_id)
-            if pid is None or pid == self._pid:
+            pid = self._new_master()
+            if pid is None:
                 continue
             try:
                 registered = register_all(self.master_uri, self.caller_id, self.node_uri)

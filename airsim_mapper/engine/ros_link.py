@@ -17,8 +17,12 @@ class RosTypeError(LookupError):
 
 
 def message_class(ros_type: str, kind: str = "msg") -> type:
-    """`pkg/Name` -> the generated class from `pkg.msg` (or `pkg.srv`)."""
+    """`pkg/Name` -> the generated class from `pkg.msg` (or `pkg.srv`); only genpy-generated types."""
+    from airsim_mapper.mapping.checks import generated_kind
+
     package, _, name = ros_type.partition("/")
+    if generated_kind(ros_type) != ("topic" if kind == "msg" else "service"):
+        raise RosTypeError(f"ROS {kind} type {ros_type!r} is not a genpy-generated {kind} type")
     try:
         return getattr(importlib.import_module(f"{package}.{kind}"), name)
     except (ImportError, AttributeError) as exc:

@@ -10,9 +10,11 @@
 - Receiving: the client's own receive loop ends for good on the first undecodable frame (and a callback
   error kills it). The link runs its own loop on the client's socket instead (`_receive`, the same
   dispatch): a malformed frame is dropped, counted in `bad_frames` and reported at most every 5 s.
-- Liveness: the link notices when the topics connection drops (an NNG pipe removal: the server died or
-  restarted) and offers a cheap `probe`. A link marked dead answers every call at once with SimLinkError
-  instead of waiting on sockets that will never answer (see health.py and Engine's reconnect).
+- Liveness: the link notices when a connection drops (an NNG pipe removal on either socket: the server
+  died or restarted) and offers a cheap `probe`. A link marked dead answers every call at once with
+  SimLinkError instead of waiting on sockets that will never answer (see health.py and Engine's reconnect).
+- Closing is bounded: once `begin_close` is called, unsubscribes are only collected, and `close` sends
+  them as one request with a timeout, so a frozen simulator cannot hold up a shutdown.
 """
 
 from __future__ import annotations
@@ -57,11 +59,17 @@ class SimLink:
         self._loop = asyncio.new_event_loop()
         self._loop_thread = threading.Thread(target=self._run_loop, name="sim-requests", daemon=True)
         self._loop_thread.start()
-        self.dropped = threading.Event()  # the topics connection dropped at least once
+        self.dropped = threading.Event()  # a connection dropped at least once
         self.dead = False
-        self._watched = getattr(client, "socket_topics", None)
-        if self._watched is not None:
-            self._watched.add_post_pipe_remove_cb(self._on_pipe_removed)
+        self._closing = False
+        self._pending: set[str] = set()  # topics to unsubscribe when closing
+        self._watched = [
+            sock
+            for sock in (getattr(client, "socket_topics", None), getattr(client, "socket_services", None))
+            if sock is not None
+        ]
+        for sock in self._watched:
+            sock.add_post_pipe_remove_cb(self._on_pipe_removed)
         self.bad_frames = 0
         self.fast_frames = 0  # frames decoded on the fast path
         self._last_warning = -1e9
@@ -119,7 +127,7 @@ class SimLink:
     def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
         """The message of a frame body. Large bodies that only the bridge listens to are decoded with
         their float/int arrays straight into numpy (fast_frames.decode_map), skipping the per-element
-        Python lists msgpack would build (15-25 ms for a 100k-point scan), and their large bin values
+        Python lists msgpack would build (docs/performance.md has the cost), and their large bin values
         (image pixels) as memoryviews of the body, which the image converter publishes without a copy.
         Everything else, and anything unusual, takes msgpack's path, exactly as the client would."""
         import msgpack
@@ -150,7 +158,7 @@ class SimLink:
 
     # --- liveness ---------------------------------------------------------------------------
     def _on_pipe_removed(self, _pipe: Any) -> None:
-        """NNG callback thread: the server closed the topics connection (died, restarted, or dropped us)."""
+        """NNG callback thread: the server closed a connection (died, restarted, or dropped us)."""
         self.dropped.set()
 
     def connected(self) -> bool:
@@ -177,8 +185,8 @@ class SimLink:
             if not self.dead:
                 self.client.subscribe(topic, callback)
 
-    def unsubscribe(self, topic: str, callback: TopicCallback) -> None:
-        """Remove one of our callbacks; unsubscribe on the server only when nobody else listens."""
+    def _forget(self, topic: str, callback: TopicCallback) -> bool:
+        """Remove one of our callbacks locally; True when the server should be told to unsubscribe."""
         with self._lock:
             ours = self._ours.get(topic, [])
             if callback in ours:
@@ -186,16 +194,25 @@ class SimLink:
             if not ours:
                 self._ours.pop(topic, None)
             if self.dead:
-                return
+                return False
             entry = self.client.subs.get(topic)
             if entry is None:
-                return
+                return False
             callbacks = entry["callbacks"]
             # Replace the list rather than mutate it: the receive thread may be iterating the old one.
             # `!=`, not `is not`: every access to a bound method (stream.offer) makes a new object.
             entry["callbacks"] = [cb for cb in callbacks if cb != callback]
             if entry["callbacks"]:
-                return
+                return False
+            if self._closing:
+                self._pending.add(topic)
+                return False
+            return True
+
+    def unsubscribe(self, topic: str, callback: TopicCallback) -> None:
+        """Remove one of our callbacks; unsubscribe on the server only when nobody else listens."""
+        if not self._forget(topic, callback):
+            return
         try:
             self.call(
                 "/Sim/Unsubscribe",
@@ -208,15 +225,6 @@ class SimLink:
             entry = self.client.subs.get(topic)
             if entry is not None and not entry["callbacks"]:
                 self.client.subs.pop(topic, None)
-
-    def resubscribe_all(self) -> None:
-        """Re-send SUBSCRIBE for every topic we hold callbacks for (after the server dropped them)."""
-        with self._lock:
-            for topic, callbacks in self._ours.items():
-                entry = self.client.subs.setdefault(topic, {"reliability": 1.0, "callbacks": []})
-                missing = [cb for cb in callbacks if cb not in entry["callbacks"]]
-                entry["callbacks"] = entry["callbacks"] + missing
-                self.client.try_send(_subscribe_frame(topic))
 
     def forget_all(self) -> None:
         """Drop our bookkeeping after the client's subscriptions were cleared (scene load)."""
@@ -247,7 +255,7 @@ class SimLink:
             return future.result(timeout=timeout)
         except concurrent.futures.TimeoutError as exc:
             future.cancel()
-            raise SimLinkError(f"{method}: no reply within {timeout:.0f} s") from exc
+            raise SimLinkError(f"{method}: no reply within {timeout:.3g} s") from exc
 
     async def _request(self, method: str, params: dict) -> Any:
         request = {"method": method, "params": params, "version": 1.0}
@@ -279,9 +287,9 @@ class SimLink:
 
     def stop_loop(self) -> None:
         """Stop the request loop thread (pending requests are abandoned)."""
-        if self._watched is not None:
+        for sock in self._watched:
             with contextlib.suppress(ValueError):
-                self._watched.remove_post_pipe_remove_cb(self._on_pipe_removed)
+                sock.remove_post_pipe_remove_cb(self._on_pipe_removed)
         with contextlib.suppress(RuntimeError):  # already stopped and closed
             self._loop.call_soon_threadsafe(self._loop.stop)
         if threading.current_thread() is not self._loop_thread:
@@ -297,17 +305,38 @@ class SimLink:
         close_client(self.client)
         self.stop_loop()
 
-    def close(self) -> None:
-        """Remove every callback of ours from the client, then stop the request loop."""
-        if self.dead:
-            self.stop_loop()
-            return
+    def begin_close(self) -> None:
+        """From now on unsubscribes are collected for `close` instead of sent one by one."""
+        self._closing = True
+
+    def close(self, timeout: float = 10.0, client_topics: bool = False) -> bool:
+        """Remove every callback of ours from the client, tell the server in one request (waiting at most
+        `timeout` s), then stop the request loop. With `client_topics` every topic the client holds is
+        unsubscribed (the link's owner closes the client next). False if the server did not answer."""
+        self.begin_close()
         with self._lock:
-            topics = list(self._ours.items())
+            topics = [(topic, list(callbacks)) for topic, callbacks in self._ours.items()]
         for topic, callbacks in topics:
-            for cb in list(callbacks):
-                self.unsubscribe(topic, cb)
+            for cb in callbacks:
+                self._forget(topic, cb)
+        with self._lock:
+            pending, self._pending = set(self._pending), set()
+            if client_topics and not self.dead:
+                pending |= set(self.client.subs)
+        answered = not self.dead
+        if pending and not self.dead:
+            try:
+                self.call("/Sim/Unsubscribe", {"topic_paths": sorted(pending)}, timeout=timeout)
+            except SimLinkError as exc:
+                log.warning("unsubscribing %d topics at close: %s", len(pending), exc)
+                answered = False
+            with self._lock:
+                for topic in pending:
+                    entry = self.client.subs.get(topic)
+                    if entry is not None and (client_topics or not entry["callbacks"]):
+                        self.client.subs.pop(topic, None)
         self.stop_loop()
+        return answered
 
 
 def _unknown_topic(topic: str) -> Any:
@@ -327,9 +356,3 @@ def close_client(client: Any) -> None:
         if sock is not None:
             with contextlib.suppress(Exception):
                 sock.close()
-
-
-def _subscribe_frame(topic: str) -> bytes:
-    import msgpack
-
-    return msgpack.packb([0, topic, ""], use_bin_type=True)

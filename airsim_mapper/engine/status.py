@@ -1,10 +1,12 @@
 """The node's status topic: `/airsim_mapper/<node>/status`, a latched std_msgs/String holding JSON.
 
-Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale), reconnects, sim_losses,
-master_reregistrations, and per simulator topic stream: received, dropped, handled, errors, age_s
-(seconds since its last message), and the peaks since the previous status: arrival_gap_max_ms (longest
-interval between two arrivals), wait_max_ms (longest wait for the worker), handle_max_ms (longest
-handling). Published on every state change and once a second.
+Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
+"unresponsive: ..." while it is open), reconnects, sim_losses, stalls (times the simulator stopped
+answering on an open connection), master_reregistrations, and per simulator topic stream: received,
+dropped, handled, errors, age_s (seconds since its last message), and the peaks since the previous
+status: arrival_gap_max_ms (longest interval between two arrivals), wait_max_ms (longest wait for the
+worker), handle_max_ms (longest handling). Published on every state change and once a second, by a
+thread of its own.
 """
 
 from __future__ import annotations

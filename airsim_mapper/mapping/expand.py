@@ -139,7 +139,7 @@ def _bridge(rule: Rule, key: str, variables: dict[str, str], source: dict[str, A
         tf=TfSpec(fill(rule.tf.parent), fill(rule.tf.child)) if rule.tf else None,
         convention=rule.convention,
         options=rule.options,
-        params=rule.params,
+        params=MappingProxyType(template.render_all(rule.params, variables)),
         variables=MappingProxyType(dict(variables)),
         source=MappingProxyType(source),
         ros_kind=rule.ros_kind,

@@ -10,32 +10,37 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from airsim_mapper.image_types import SEED_IMAGE_TYPES
+from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
-from airsim_mapper.mapping.model import Limits, Mapping, Options, Rule, TfSpec
+from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
 from airsim_mapper.mapping.schema import schema_problems
-from airsim_mapper.mapping.yamlmarks import load_marked
+from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
+from airsim_mapper.resources import mapping_path
 
-DEFAULT_IMAGE_TYPES: dict[int, str] = dict(SEED_IMAGE_TYPES)
+DEFAULT_IMAGE_TYPES: dict[int, str] = dict(DOCUMENTED_IMAGE_TYPES)
 OPTION_KEYS = ("queue_size", "latch", "lazy", "rate_limit_hz", "stamp", "enabled", "watchdog_s")
-LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "on_violation")
+LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "position_box", "on_violation")
 
 
-def load_mapping(path: str | Path) -> Mapping:
-    """Read, validate and build the mapping in `path`; raise MappingError with every problem found."""
+def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
+    """Read, validate and build the mapping in `path` (a file, or a shipped mapping's name: see
+    resources.mapping_path); raise MappingError with every problem found.
+
+    `limits` bounds the file's size and its alias expansion (generous defaults)."""
+    path = mapping_path(path)
     file = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:
         reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
         raise MappingError.single(file, f"cannot read the mapping file: {reason}", unreadable=True) from None
-    return load_mapping_text(text, file)
+    return load_mapping_text(text, file, limits)
 
 
-def load_mapping_text(text: str, file: str = "<string>") -> Mapping:
+def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | None = None) -> Mapping:
     """Validate and build a mapping from YAML text; `file` names it in messages."""
-    data, marks = load_marked(text, file)
+    data, marks = load_marked(text, file, limits)
     if not isinstance(data, dict):
         kind = "a list" if isinstance(data, list) else f"the scalar {data!r}"
         raise MappingError.single(file, f"the top level must be a mapping of keys (found {kind})", 1, 1)
@@ -70,7 +75,10 @@ def load_mapping_text(text: str, file: str = "<string>") -> Mapping:
 
 def _options(raw: dict[str, Any], base: Options) -> Options:
     values = {key: raw.get(key, getattr(base, key)) for key in OPTION_KEYS}
-    limits_raw = raw.get("limits") or {}
+    limits_raw = dict(raw.get("limits") or {})
+    box = limits_raw.get("position_box")
+    if isinstance(box, dict):
+        limits_raw["position_box"] = PositionBox(tuple(box["min"]), tuple(box["max"]))
     limits = Limits(**{key: limits_raw.get(key, getattr(base.limits, key)) for key in LIMIT_KEYS})
     values["queue_size"] = int(values["queue_size"])
     return Options(**values, limits=limits)

@@ -47,12 +47,21 @@ DOMAIN_VARIABLES = {
 
 
 @dataclass(frozen=True)
+class PositionBox:
+    """An axis-aligned box (metres, in the rule's convention) that commanded positions must lie in."""
+
+    min: tuple[float, float, float]
+    max: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
 class Limits:
     """Bounds applied to incoming commands (absent = unbounded)."""
 
     max_linear_speed: float | None = None  # m/s, norm of the linear velocity
     max_vertical_speed: float | None = None  # m/s, |z|
     max_yaw_rate: float | None = None  # rad/s
+    position_box: PositionBox | None = None  # desired_pose, camera_desired_pose
     on_violation: str = "clamp"  # "clamp" or "reject"
 
 

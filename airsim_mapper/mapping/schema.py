@@ -1,4 +1,4 @@
-"""The mapping JSON Schema (schemas/mapping.schema.json) and readable, located messages for its errors."""
+"""The mapping JSON Schema (package data: resources.SCHEMA_PATH) and readable, located error messages."""
 
 from __future__ import annotations
 
@@ -6,15 +6,13 @@ import difflib
 import json
 from collections.abc import Iterator
 from functools import cache
-from pathlib import Path
 from typing import Any
 
 import jsonschema
 
 from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.yamlmarks import Marks
-
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "mapping.schema.json"
+from airsim_mapper.resources import SCHEMA_PATH
 
 
 @cache

@@ -6,7 +6,8 @@ A placeholder is `<` + a lower-case identifier + `>`. Any other `<` or `>` is ma
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from typing import Any
 
 PLACEHOLDER = re.compile(r"<([a-z][a-z0-9_]*)>")
 
@@ -39,3 +40,28 @@ def render(template: str, values: Mapping[str, str]) -> str:
         return values[name]
 
     return PLACEHOLDER.sub(one, template)
+
+
+def templates_in(value: Any, path: tuple[Any, ...] = ()) -> Iterator[tuple[tuple[Any, ...], str]]:
+    """(path, text) of every string inside `value` (maps and lists, e.g. a rule's params) that holds a
+    placeholder: those strings are templates; any other string is plain text."""
+    if isinstance(value, str):
+        if PLACEHOLDER.search(value):
+            yield path, value
+    elif isinstance(value, Mapping):
+        for key, item in value.items():
+            yield from templates_in(item, (*path, key))
+    elif isinstance(value, (list, tuple)):
+        for index, item in enumerate(value):
+            yield from templates_in(item, (*path, index))
+
+
+def render_all(value: Any, values: Mapping[str, str]) -> Any:
+    """`value` with every template string inside it (see `templates_in`) rendered; maps become dicts."""
+    if isinstance(value, str):
+        return render(value, values) if PLACEHOLDER.search(value) else value
+    if isinstance(value, Mapping):
+        return {key: render_all(item, values) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [render_all(item, values) for item in value]
+    return value

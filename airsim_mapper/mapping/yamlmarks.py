@@ -4,6 +4,10 @@
 each value's path (a tuple of keys and indexes) to its (line, column), 1-based. Only the safe YAML tags are
 constructed; `!!python/...` tags and other unknown tags are errors. Duplicate keys and recursive aliases are
 errors too, never silently accepted.
+
+Aliases are expanded into plain data, so a few hundred bytes of nested aliases ("billion laughs") could
+expand to billions of values. `YamlLimits` bounds the expansion (values built, alias expansions) and the
+file size; exceeding a bound is a located error, raised as soon as it happens.
 """
 
 from __future__ import annotations
@@ -18,6 +22,19 @@ from airsim_mapper.mapping.errors import MappingError, Problem
 Path = tuple[Any, ...]
 MAX_DEPTH = 64
 PLAIN_COLLECTION_TAGS = ("tag:yaml.org,2002:map", "tag:yaml.org,2002:seq")
+
+
+@dataclass(frozen=True)
+class YamlLimits:
+    """Bounds on a mapping document (the shipped mappings use a few hundred values and no alias)."""
+
+    max_bytes: int = 16 * 1024 * 1024  # size of the file
+    max_values: int = 100_000  # values built, aliases expanded
+    max_alias_expansions: int = 10_000  # times an alias (or a value inside one) is expanded
+
+
+class _TooLarge(Exception):
+    """The document exceeded a YamlLimits bound; the problem is already recorded."""
 
 
 @dataclass(frozen=True)
@@ -58,18 +75,57 @@ def _yaml_problem(file: str, err: yaml.YAMLError) -> Problem:
 class _Builder:
     """Turns a composed YAML node tree into plain data, recording marks and collecting problems."""
 
-    def __init__(self, loader: yaml.SafeLoader, file: str) -> None:
+    def __init__(self, loader: yaml.SafeLoader, file: str, limits: YamlLimits) -> None:
         self.loader = loader
         self.file = file
+        self.limits = limits
         self.values: dict[Path, tuple[int, int]] = {}
         self.keys: dict[Path, tuple[int, int]] = {}
         self.problems: list[Problem] = []
+        self.built = 0
+        self.expansions = 0
+        self._seen: set[int] = set()
+        self._alias: yaml.Node | None = None  # the outermost alias being expanded
 
     def problem(self, node: yaml.Node, message: str) -> None:
         line, col = _mark(node)
         self.problems.append(Problem(self.file, line, col, message))
 
+    def _count(self, node: yaml.Node) -> bool:
+        """Count one value built; True if `node` was built before (an alias expansion). Abort beyond the
+        limits, at the outermost alias being expanded."""
+        self.built += 1
+        again = id(node) in self._seen
+        if again:
+            self.expansions += 1
+        else:
+            self._seen.add(id(node))
+        limits = self.limits
+        if self.built > limits.max_values:
+            what = f"more than {limits.max_values} values"
+        elif self.expansions > limits.max_alias_expansions:
+            what = f"more than {limits.max_alias_expansions} alias expansions"
+        else:
+            return again
+        if self._alias is None:
+            self.problem(node, f"the YAML holds {what}; nothing was loaded")
+        else:
+            self.problem(
+                self._alias,
+                f"the aliases of this anchor expand the YAML to {what} (an alias bomb?); nothing was loaded",
+            )
+        raise _TooLarge
+
     def build(self, node: yaml.Node, path: Path, stack: tuple[int, ...]) -> Any:
+        if self._count(node) and self._alias is None:
+            self._alias = node
+            try:
+                return self._build(node, path, stack)
+            finally:
+                self._alias = None
+        return self._build(node, path, stack)
+
+    def _build(self, node: yaml.Node, path: Path, stack: tuple[int, ...]) -> Any:
         self.values.setdefault(path, _mark(node))
         if id(node) in stack or len(stack) > MAX_DEPTH:
             self.problem(node, "recursive or too deeply nested YAML (aliases that contain themselves?)")
@@ -120,8 +176,11 @@ def _reader_problem(file: str, text: str, err: yaml.reader.ReaderError) -> Probl
     return Problem(file, line, column, f"invalid YAML: character #x{err.character:04x} is not allowed")
 
 
-def load_marked(text: str, file: str) -> tuple[Any, Marks]:
+def load_marked(text: str, file: str, limits: YamlLimits | None = None) -> tuple[Any, Marks]:
     """Parse one YAML document safely; raise MappingError listing every problem found."""
+    limits = limits or YamlLimits()
+    if len(text) > limits.max_bytes:
+        raise MappingError.single(file, f"the file is larger than {limits.max_bytes} bytes", 1, 1)
     try:
         loader = yaml.SafeLoader(text)
     except yaml.reader.ReaderError as err:
@@ -137,8 +196,11 @@ def load_marked(text: str, file: str) -> tuple[Any, Marks]:
             raise MappingError.single(file, f"invalid YAML: {type(err).__name__}", 1, 1) from None
         if node is None:
             raise MappingError.single(file, "the file is empty (expected a mapping document)", 1, 1)
-        builder = _Builder(loader, file)
-        data = builder.build(node, (), ())
+        builder = _Builder(loader, file, limits)
+        try:
+            data = builder.build(node, (), ())
+        except _TooLarge:
+            raise MappingError(builder.problems[-1:]) from None
         if builder.problems:
             raise MappingError(sorted(builder.problems))
         return data, Marks(builder.values, builder.keys)

@@ -19,7 +19,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         prog="airsim-mapper-sim",
         description="Headless simulator server speaking the protocol of the projectairsim 1.1.0 client.",
     )
-    parser.add_argument("--address", default="0.0.0.0", help="bind address (default 0.0.0.0)")
+    parser.add_argument(
+        "--address",
+        default="127.0.0.1",
+        help="bind address (default 127.0.0.1; another address is reachable from the network with no "
+        "authentication, and the server warns)",
+    )
     parser.add_argument("--topicsport", type=int, default=8989, help="topics (Pair0) port, default 8989")
     parser.add_argument("--servicesport", type=int, default=8990, help="services (Rep0) port, default 8990")
     parser.add_argument(

@@ -308,6 +308,14 @@ class Body:
             )
         )
 
+    def _stop_unbounded(self, command: Command | None) -> None:
+        """A step would make the state non-finite: end the command (False) and come to rest here."""
+        if command is not None and self.active is command:
+            self.active = None
+            command.finish(False)
+        for name in ("linear_velocity", "angular_velocity", "linear_acceleration", "angular_acceleration"):
+            setattr(self.state, name, np.zeros(3))
+
     def tick(
         self,
         dt: float,
@@ -350,10 +358,17 @@ class Body:
                 new_position[2] = min(new_position[2], self.ground(probe))
                 if blocked is not None and blocked(state.position, new_position):
                     new_position = state.position.copy()
-            actual_velocity = (new_position - state.position) / dt
-            angular = np.array([0.0, 0.0, yaw_rate])
-            state.linear_acceleration = (actual_velocity - state.linear_velocity) / dt
-            state.angular_acceleration = (angular - state.angular_velocity) / dt
+            with np.errstate(over="ignore", invalid="ignore"):
+                actual_velocity = (new_position - state.position) / dt
+                angular = np.array([0.0, 0.0, yaw_rate])
+                linear_acceleration = (actual_velocity - state.linear_velocity) / dt
+                angular_acceleration = (angular - state.angular_velocity) / dt
+            new_state = np.concatenate((new_position, linear_acceleration, angular_acceleration))
+            if not np.isfinite(new_state).all():
+                self._stop_unbounded(command)  # never reached through the checked service methods
+                return
+            state.linear_acceleration = linear_acceleration
+            state.angular_acceleration = angular_acceleration
             state.linear_velocity = actual_velocity
             state.angular_velocity = angular
             state.position = new_position

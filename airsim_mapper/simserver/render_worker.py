@@ -168,9 +168,9 @@ def lower_priority(nice: int, autogroup: Path = AUTOGROUP) -> int:
 
     With autogroup scheduling (`kernel.sched_autogroup_enabled`, on by default) the kernel first shares
     the CPU between sessions, and a task's nice value only ranks it within its own session. A worker at
-    nice +10 in the server's session still took its whole session's share from every other session: on
-    the soak machine a nice-0 process that woke every 2 ms waited up to 250 ms for its CPU while the worker
-    ran. The worker therefore runs in a session of its own (the server starts it with a new session when
+    nice +10 in the server's session still took its whole session's share from every other session, and
+    nice-0 processes elsewhere waited for their CPU while it ran (docs/reliability.md has the scheduler
+    trace). The worker therefore runs in a session of its own (the server starts it with a new session when
     `nice` > 0), and sets that session's autogroup to its nice value, so it yields to every process on the
     machine. Without autogroup support the file is missing and the task's nice value does the same job.
     """

@@ -3,11 +3,16 @@
 Motion commands (Takeoff, Move*, Rotate*, Land, GoHome, Hover) are served on the calling service worker:
 the handler starts the command and waits until it ends, so the reply comes when the motion is finished,
 `true` on success and `false` when pre-empted or timed out (protocol.md §3.3).
+
+The kinematic state stays finite: numbers must be finite, speeds, yaw rates and positions are bounded
+(SPEED_LIMIT_MPS, YAW_RATE_LIMIT, POSITION_LIMIT_M: far beyond any robot, but far from overflowing), and
+a command that would leave those bounds is refused with a parameter error (code 2) before it starts.
 """
 
 from __future__ import annotations
 
 import functools
+import logging
 import math
 from collections.abc import Callable
 from typing import Any
@@ -44,6 +49,10 @@ from airsim_mapper.simserver.streams import (
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 
+LOG = logging.getLogger("airsim_mapper.simserver")
+SPEED_LIMIT_MPS = 1e5
+YAW_RATE_LIMIT = 1e4  # rad/s
+POSITION_LIMIT_M = 1e8  # |x|, |y|, |z| of any position, commanded or reached
 COLLISION_RADIUS_M = 0.4
 COLLISION_REPEAT_NS = 100_000_000
 GROUND_PROBE_M = 0.1  # ground rays start this far above the body, so a body resting on a surface sees it
@@ -59,20 +68,54 @@ PATH_PARAMS = (
 )
 
 
-def _float(params: dict[str, Any], key: str) -> float:
+def _parameter_error(key: str, message: str) -> ServiceError:
+    return ServiceError(f"Parameter '{key}' {message}", code=2.0)
+
+
+def _number(params: dict[str, Any], key: str) -> float:
     value = params[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ServiceError(f"Parameter '{key}' must be a number, got {value!r}", code=2.0)
+        raise _parameter_error(key, f"must be a number, got {value!r}")
     return float(value)
 
 
+def _float(params: dict[str, Any], key: str, limit: float = math.inf) -> float:
+    """A finite number parameter, at most `limit` in magnitude."""
+    value = _number(params, key)
+    if not math.isfinite(value):
+        raise _parameter_error(key, f"must be finite, got {value}")
+    if abs(value) > limit:
+        raise _parameter_error(key, f"must be within +-{limit:g}, got {value:g}")
+    return value
+
+
 def _timeout(params: dict[str, Any]) -> float:
-    value = _float(params, "timeout_sec")
+    value = _number(params, "timeout_sec")
     return value if value > 0 and math.isfinite(value) else math.inf
 
 
 def _yaw_mode(params: dict[str, Any]) -> YawMode:
-    return YawMode(bool(params["yaw_is_rate"]), _float(params, "yaw"), int(params["drivetrain"]))
+    is_rate = bool(params["yaw_is_rate"])
+    yaw = _float(params, "yaw", YAW_RATE_LIMIT if is_rate else math.inf)
+    return YawMode(is_rate, yaw, int(params["drivetrain"]))
+
+
+def _within_world(key: str, position: np.ndarray) -> np.ndarray:
+    """`position`, if every coordinate is finite and within POSITION_LIMIT_M; else a parameter error."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        inside = np.all(np.abs(position) <= POSITION_LIMIT_M)
+    if not inside:
+        where = ", ".join(f"{v:g}" for v in position)
+        raise _parameter_error(key, f"leads to ({where}), outside the +-{POSITION_LIMIT_M:g} m world")
+    return position
+
+
+def _speed(key: str, velocity: np.ndarray) -> np.ndarray:
+    with np.errstate(over="ignore", invalid="ignore"):
+        speed = float(np.linalg.norm(velocity))
+    if not speed <= SPEED_LIMIT_MPS:
+        raise _parameter_error(key, f"asks for {speed:g} m/s; at most {SPEED_LIMIT_MPS:g} m/s")
+    return velocity
 
 
 class RobotRuntime:
@@ -210,6 +253,10 @@ class RobotRuntime:
             kin = messages.parse_kinematics(params["kinematics"])
         except MessageError as exc:
             raise ServiceError(str(exc), code=2.0) from exc
+        _within_world("kinematics", kin.position)
+        _speed("kinematics", kin.linear_velocity)
+        if not float(np.linalg.norm(kin.angular_velocity)) <= YAW_RATE_LIMIT:
+            raise _parameter_error("kinematics", f"angular velocity must be within {YAW_RATE_LIMIT:g} rad/s")
         self.body.teleport(kin.position, kin.orientation, reset_kinematics=True)
         with self.body.lock:
             self.body.state.linear_velocity = kin.linear_velocity
@@ -225,13 +272,19 @@ class RobotRuntime:
             position, orientation = messages.parse_transform(params["pose"])
         except MessageError as exc:
             raise ServiceError(str(exc), code=2.0) from exc
+        _within_world("pose", position)
         self.body.teleport(position, orientation, bool(params["reset_kinematics"]))
         self.publish_pose(self.clock.now_ns())
         return True
 
     def on_desired_pose(self, _path: str, message: Any) -> None:
-        """A client MESSAGE on desired_pose teleports the robot."""
-        position, orientation = messages.parse_pose_stamped(message)
+        """A client MESSAGE on desired_pose teleports the robot (an invalid one is logged and ignored)."""
+        try:
+            position, orientation = messages.parse_pose_stamped(message)
+            _within_world("position", position)
+        except (MessageError, ServiceError) as exc:
+            LOG.warning("ignored a desired_pose for %s: %s", self.spec.name, exc)
+            return
         self.body.teleport(position, orientation, reset_kinematics=True)
         self.publish_pose(self.clock.now_ns())
 
@@ -253,9 +306,10 @@ class RobotRuntime:
 
         def set_pose(params: dict[str, Any]) -> bool:
             try:
-                camera.set_pose(*messages.parse_transform(params["pose"]))
+                position, orientation = messages.parse_transform(params["pose"])
             except MessageError as exc:
                 raise ServiceError(str(exc), code=2.0) from exc
+            camera.set_pose(_within_world("pose", position), orientation)
             return True
 
         def reset_pose(_: dict[str, Any]) -> bool:
@@ -307,7 +361,7 @@ class RobotRuntime:
         return self._run(Path([target], TAKEOFF_SPEED, YawMode(True, 0.0), _timeout(params)))
 
     def _go_home(self, params: dict[str, Any]) -> bool:
-        speed = _float(params, "velocity")
+        speed = _float(params, "velocity", SPEED_LIMIT_MPS)
         return self._run(
             Path([self.body.home], speed if speed > 0 else 5.0, YawMode(True, 0.0), _timeout(params))
         )
@@ -316,35 +370,48 @@ class RobotRuntime:
         def move(params: dict[str, Any]) -> bool:
             vx, vy = _float(params, "vx"), _float(params, "vy")
             vz = 0.0 if hold_z else _float(params, "vz")
+            _speed("vx, vy, vz", np.array([vx, vy, vz]))
+            kin = self.body.snapshot()
             velocity = np.array([vx, vy, vz])
             if body_frame:
-                velocity = body_to_world_velocity(self.body.snapshot().orientation, vx, vy, vz)
-            z = _float(params, "z") if hold_z else None
-            return self._run(Velocity(velocity, _float(params, "duration"), _yaw_mode(params), z))
+                velocity = body_to_world_velocity(kin.orientation, vx, vy, vz)
+            z = _float(params, "z", POSITION_LIMIT_M) if hold_z else None
+            duration = _float(params, "duration")
+            _within_world("duration", kin.position + velocity * max(duration, 0.0))
+            return self._run(Velocity(velocity, duration, _yaw_mode(params), z))
 
         return move
 
     def _move_to(self, params: dict[str, Any]) -> bool:
-        target = [_float(params, "x"), _float(params, "y"), _float(params, "z")]
-        return self._run(Path([target], _float(params, "velocity"), _yaw_mode(params), _timeout(params)))
+        target = [_float(params, key, POSITION_LIMIT_M) for key in ("x", "y", "z")]
+        speed = _float(params, "velocity", SPEED_LIMIT_MPS)
+        return self._run(Path([target], speed, _yaw_mode(params), _timeout(params)))
 
     def _move_on_path(self, params: dict[str, Any]) -> bool:
         path = params["path"]
         if not isinstance(path, list) or not all(isinstance(p, list) and len(p) == 3 for p in path):
             raise ServiceError(f"path must be a list of [x, y, z] points, got {path!r}", code=2.0)
-        return self._run(Path(path, _float(params, "velocity"), _yaw_mode(params), _timeout(params)))
+        try:
+            points = np.array(path, dtype=float).reshape(-1, 3)
+        except (TypeError, ValueError) as exc:
+            raise _parameter_error("path", f"must hold numbers ({exc})") from None
+        for point in points:
+            _within_world("path", point)
+        speed = _float(params, "velocity", SPEED_LIMIT_MPS)
+        return self._run(Path(list(points), speed, _yaw_mode(params), _timeout(params)))
 
     def _rotate_to(self, params: dict[str, Any]) -> bool:
         command = Rotate(
             _float(params, "yaw"),
-            _float(params, "yaw_rate"),
+            _float(params, "yaw_rate", YAW_RATE_LIMIT),
             margin=_float(params, "margin"),
             timeout_s=_timeout(params),
         )
         return self._run(command)
 
     def _rotate_by(self, params: dict[str, Any]) -> bool:
-        return self._run(Rotate(None, _float(params, "yaw_rate"), duration=_float(params, "duration")))
+        rate = _float(params, "yaw_rate", YAW_RATE_LIMIT)
+        return self._run(Rotate(None, rate, duration=_float(params, "duration")))
 
     def _multirotor_methods(self) -> list[Method]:
         p = self.prefix

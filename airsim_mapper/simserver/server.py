@@ -23,7 +23,7 @@ NEVER_EXPIRES = 0xFFFFFFFFFFFFFFFF
 
 @dataclass(frozen=True)
 class ServerOptions:
-    address: str = "0.0.0.0"
+    address: str = "127.0.0.1"  # anything else exposes an unauthenticated control port: say so
     topics_port: int = 8989
     services_port: int = 8990
     world_path: str | None = None
@@ -31,6 +31,18 @@ class ServerOptions:
     tick_rate_hz: float = 200.0
     workers: int = 32
     render_nice: int | None = RENDER_NICE  # None renders in the server's own process
+
+
+def is_loopback(address: str) -> bool:
+    """Whether `address` (a host name or an IP address) is this machine's loopback."""
+    import ipaddress
+
+    if address == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(address).is_loopback
+    except ValueError:
+        return False
 
 
 class SimServer:
@@ -45,6 +57,9 @@ class SimServer:
         self.hub = TopicHub(options.address, options.topics_port)
         self.services = ServiceServer(self.table, options.address, options.services_port, options.workers)
         self._scene_lock = threading.Lock()
+        # held by each loop around one step of the current session, and by a scene swap (both of them)
+        self._sim_step_lock = threading.Lock()
+        self._sensor_step_lock = threading.Lock()
         self._stopping = threading.Event()
         self._default_trajectories = TrajectoryStore()
         self.session: Session | None = None
@@ -64,6 +79,12 @@ class SimServer:
         for thread in self._threads:
             thread.start()
         LOG.info("serving topics on %s and services on %s", self.hub.url, self.services.url)
+        if not is_loopback(self.options.address):
+            LOG.warning(
+                "listening on %s: anyone who can reach it can drive, reset and reload this simulator "
+                "(the protocol has no authentication); use --address 127.0.0.1 to keep it local",
+                self.options.address,
+            )
 
     def stop(self) -> None:
         self._stopping.set()
@@ -104,16 +125,24 @@ class SimServer:
         return Session(spec, self.world, self.hub, render)
 
     def _activate(self, session: Session) -> None:
-        """Swap in a new scene: methods, topic table (with `/$topics` cached) and initial publications."""
-        old = self.session
-        if old is not None:
-            old.stop()
-        methods = [m for m in session.methods() if m.name != f"{DEFAULT_SCENE_PREFIX}/ImportNEDTrajectory"]
-        self.table.replace_group(self._session_methods, methods)
-        self._session_methods = [m.name for m in methods]
-        self.hub.set_table(session.topics(), session.topic_handlers())
-        self.session = session
-        session.start()
+        """Swap in a new scene: methods, topic table (with `/$topics` cached) and initial publications.
+
+        The swap waits for a simulation or sensor step of the old scene in progress (a render can take a
+        while), so that nothing the old scene publishes lands in the new table: a scene reloaded with the same
+        id has the same topic paths, and an old frame would become the new scene's cached value.
+        """
+        with self._sim_step_lock, self._sensor_step_lock:
+            old = self.session
+            if old is not None:
+                old.stop()
+            methods = [
+                m for m in session.methods() if m.name != f"{DEFAULT_SCENE_PREFIX}/ImportNEDTrajectory"
+            ]
+            self.table.replace_group(self._session_methods, methods)
+            self._session_methods = [m.name for m in methods]
+            self.hub.set_table(session.topics(), session.topic_handlers())
+            self.session = session
+            session.start()
         LOG.info("scene %s loaded (%d robots)", session.spec.id, len(session.robots))
 
     def _load_scene(self, params: dict[str, Any]) -> str:
@@ -152,10 +181,11 @@ class SimServer:
             publish_pose = now >= next_pose
             if publish_pose:
                 next_pose = max(next_pose + pose_period, now - pose_period)
-            session = self.session
             try:
-                if session is not None:
-                    session.tick(publish_pose)
+                with self._sim_step_lock:
+                    session = self.session
+                    if session is not None:
+                        session.tick(publish_pose)
             except Exception:
                 LOG.exception("simulation tick failed")
             next_tick += period
@@ -167,11 +197,12 @@ class SimServer:
 
     def _sensor_loop(self) -> None:
         while not self._stopping.is_set():
-            session = self.session
             worked = False
             try:
-                if session is not None:
-                    worked = session.sensor_tick()
+                with self._sensor_step_lock:
+                    session = self.session
+                    if session is not None:
+                        worked = session.sensor_tick()
             except RenderWorkerError as exc:  # the worker is replaced on the next capture
                 LOG.warning("sensor step failed: %s", exc)
                 self._stopping.wait(0.1)

@@ -45,7 +45,6 @@ class TopicInfo:
 
 
 MessageHandler = Callable[[str, Any], None]
-SubscriptionListener = Callable[[str, bool], None]
 
 
 def topic_list_message(infos: Iterable[TopicInfo]) -> list[dict[str, Any]]:
@@ -70,7 +69,6 @@ class TopicHub:
         self._subscribed: set[str] = set()
         self._cache: dict[str, bytes] = {}
         self._handlers: dict[str, MessageHandler] = {}
-        self._listeners: list[SubscriptionListener] = []
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._recv_loop, name="topics-recv", daemon=True)
 
@@ -102,10 +100,6 @@ class TopicHub:
         with self._lock:
             return dict(self._table)
 
-    def add_listener(self, listener: SubscriptionListener) -> None:
-        """Call `listener(path, is_subscribed)` on every (un)subscription."""
-        self._listeners.append(listener)
-
     def is_subscribed(self, path: str) -> bool:
         return path in self._subscribed
 
@@ -134,16 +128,11 @@ class TopicHub:
     def unsubscribe(self, paths: Iterable[str]) -> bool:
         """The `/Sim/Unsubscribe` service: false if any path is not a registered topic."""
         all_known = True
-        changed = []
         with self._lock:
             for path in paths:
                 if path not in self._table:
                     all_known = False
-                if path in self._subscribed:
-                    self._subscribed.discard(path)
-                    changed.append(path)
-        for path in changed:
-            self._notify(path, False)
+                self._subscribed.discard(path)
         return all_known
 
     def _send(self, path: str, body: bytes) -> None:
@@ -197,7 +186,6 @@ class TopicHub:
             cached = self._cache.get(path)
         if cached is not None:
             self._send(path, cached)
-        self._notify(path, True)
 
     def _on_message(self, path: str, body: bytes) -> None:
         with self._lock:
@@ -208,13 +196,6 @@ class TopicHub:
             return
         handler(path, protocol.decode_body(body))
 
-    def _notify(self, path: str, subscribed: bool) -> None:
-        for listener in self._listeners:
-            try:
-                listener(path, subscribed)
-            except Exception:
-                LOG.exception("subscription listener failed")
-
     def _on_pipe_connected(self, pipe: pynng.Pipe) -> None:
         with self._lock:
             self._pipes.add(pipe.id)
@@ -224,8 +205,6 @@ class TopicHub:
             if pipe.id not in self._pipes:
                 return  # a refused second peer: the real client is still connected
             self._pipes.discard(pipe.id)
-            gone = list(self._subscribed)
+            gone = len(self._subscribed)
             self._subscribed.clear()
-        for path in gone:
-            self._notify(path, False)
-        LOG.info("topics client disconnected; cleared %d subscriptions", len(gone))
+        LOG.info("topics client disconnected; cleared %d subscriptions", gone)

@@ -8,9 +8,8 @@ import time
 from collections.abc import Iterator
 
 import pytest
-from bridgeharness import Rig
-from harness import Launcher, RosMaster, start_master
-from simharness import start_simserver
+from bridgeharness import Stack
+from harness import Rig, RosMaster
 
 ROS_KEYS = ("ROS_MASTER_URI", "ROS_HOSTNAME", "ROS_LOG_DIR", "ROS_HOME")
 
@@ -18,8 +17,8 @@ ROS_KEYS = ("ROS_MASTER_URI", "ROS_HOSTNAME", "ROS_LOG_DIR", "ROS_HOME")
 @pytest.fixture(scope="session")
 def ros_session(tmp_path_factory) -> Iterator[RosMaster]:
     """A roscore for all bridge tests; this pytest process joins it as the probe node."""
-    launcher = Launcher(tmp_path_factory.mktemp("roscore"), dict(os.environ))
-    master = start_master(launcher)
+    launcher = Rig(tmp_path_factory.mktemp("roscore"), dict(os.environ))
+    master = launcher.roscore()
     saved = {key: os.environ.get(key) for key in ROS_KEYS}
     os.environ.update({key: master.env[key] for key in ROS_KEYS})
     import rospy
@@ -37,12 +36,12 @@ def ros_session(tmp_path_factory) -> Iterator[RosMaster]:
 
 @pytest.fixture(scope="module")
 def rig_factory(ros_session: RosMaster, tmp_path_factory) -> Iterator[callable]:
-    launchers: list[Launcher] = []
+    launchers: list[Rig] = []
 
-    def make() -> Rig:
-        launcher = Launcher(tmp_path_factory.mktemp("rig"), dict(ros_session.env))
+    def make() -> Stack:
+        launcher = Rig(tmp_path_factory.mktemp("rig"), dict(ros_session.env))
         launchers.append(launcher)
-        return Rig(launcher, start_simserver(launcher), None, "")
+        return Stack(launcher, launcher.simserver(), None, "")
 
     yield make
     for launcher in launchers:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bridgeharness import Rig
+from bridgeharness import Stack
 from harness import wait_until
 
 
@@ -11,7 +11,7 @@ def test_land_all_and_takeoff_all_move_every_drone_of_the_scene(rig_factory):
     from geometry_msgs.msg import PoseStamped
     from std_srvs.srv import Trigger
 
-    rig: Rig = rig_factory()
+    rig: Stack = rig_factory()
     rig.start_node(
         "--scene",
         "scene_two_drones.jsonc",

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from bridgeharness import Rig, published_topics, wait_gone, wait_topic
+from bridgeharness import Stack, published_topics, wait_gone, wait_topic
 from harness import wait_until
 
 ROBOT = "/airsim_node/Drone1"
@@ -38,7 +38,7 @@ class PoseWatch:
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Rig:
+def rig(rig_factory) -> Stack:
     rig = rig_factory()
     rig.start_node(
         "--scene", "scene_drone_sensors.jsonc", node_name="cmd_bridge", wait_for=f"{ROBOT}/actual_pose"
@@ -53,7 +53,7 @@ def rig(rig_factory) -> Rig:
 
 
 @pytest.fixture(scope="module")
-def pose(rig: Rig) -> Iterator[PoseWatch]:
+def pose(rig: Stack) -> Iterator[PoseWatch]:
     watch = PoseWatch()
     yield watch
     watch.sub.unregister()  # a lingering subscriber would keep later modules' dead publishers' latches
@@ -77,7 +77,7 @@ def pose_msg(x: float, y: float, z: float, yaw: float = 0.0, frame: str = "map")
     return msg
 
 
-def test_desired_pose_teleports_the_robot(rig: Rig, pose: PoseWatch):
+def test_desired_pose_teleports_the_robot(rig: Stack, pose: PoseWatch):
     from geometry_msgs.msg import PoseStamped
 
     pub = publisher(f"{ROBOT}/desired_pose", PoseStamped)
@@ -85,7 +85,7 @@ def test_desired_pose_teleports_the_robot(rig: Rig, pose: PoseWatch):
     wait_until(lambda: np.allclose(pose.position, [6.0, -3.0, -7.0], atol=0.05), 10, what="the teleport")
 
 
-def test_cmd_vel_moves_the_robot_forward_in_its_body_frame(rig: Rig, pose: PoseWatch):
+def test_cmd_vel_moves_the_robot_forward_in_its_body_frame(rig: Stack, pose: PoseWatch):
     from geometry_msgs.msg import PoseStamped, Twist
 
     # Face east (yaw +90 deg in NED): body-frame forward is world east (+y).
@@ -103,7 +103,7 @@ def test_cmd_vel_moves_the_robot_forward_in_its_body_frame(rig: Rig, pose: PoseW
     assert abs(moved[0]) < 0.3 and abs(moved[2]) < 0.3
 
 
-def test_watchdog_stops_the_robot_three_seconds_after_the_last_cmd_vel(rig: Rig, pose: PoseWatch):
+def test_watchdog_stops_the_robot_three_seconds_after_the_last_cmd_vel(rig: Stack, pose: PoseWatch):
     from geometry_msgs.msg import Twist
 
     pub = publisher(f"{ROBOT}/cmd_vel", Twist)
@@ -123,7 +123,7 @@ def test_watchdog_stops_the_robot_three_seconds_after_the_last_cmd_vel(rig: Rig,
     assert np.linalg.norm(p4 - p3) < 0.05
 
 
-def test_cmd_vel_with_nan_is_rejected_and_the_node_keeps_working(rig: Rig, pose: PoseWatch):
+def test_cmd_vel_with_nan_is_rejected_and_the_node_keeps_working(rig: Stack, pose: PoseWatch):
     from geometry_msgs.msg import PoseStamped, Twist
 
     pub = publisher(f"{ROBOT}/cmd_vel", Twist)
@@ -138,7 +138,7 @@ def test_cmd_vel_with_nan_is_rejected_and_the_node_keeps_working(rig: Rig, pose:
     wait_until(lambda: np.allclose(pose.position, [1.0, 1.0, -5.0], atol=0.05), 10, what="a later teleport")
 
 
-def test_camera_desired_pose_moves_the_camera_frame_and_its_images(rig: Rig, pose: PoseWatch):
+def test_camera_desired_pose_moves_the_camera_frame_and_its_images(rig: Stack, pose: PoseWatch):
     import rospy
     import tf2_ros
     from geometry_msgs.msg import PoseStamped
@@ -175,7 +175,7 @@ def test_camera_desired_pose_moves_the_camera_frame_and_its_images(rig: Rig, pos
     wait_until(lambda: abs(centre_depth() - 4.48) < 0.1, 10, what="the images to follow the camera")
 
 
-def test_load_scene_switches_scenes_and_the_topics_follow(rig: Rig):
+def test_load_scene_switches_scenes_and_the_topics_follow(rig: Stack):
     from std_msgs.msg import String
 
     pub = publisher("/ProjectAirSim/node/cmd_bridge/load_scene", String)
@@ -191,7 +191,7 @@ def test_load_scene_switches_scenes_and_the_topics_follow(rig: Rig):
     assert f"{ROBOT}/lidar1/lidar" not in topics
 
 
-def test_load_scene_refuses_a_path_outside_the_config_directory(rig: Rig):
+def test_load_scene_refuses_a_path_outside_the_config_directory(rig: Stack):
     from std_msgs.msg import String
 
     pub = publisher("/ProjectAirSim/node/cmd_bridge/load_scene", String)

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from bridgeharness import Rig
+from bridgeharness import Stack
 from harness import ROOT, wait_until
 
 from airsim_mapper.geometry import quat_to_matrix
@@ -17,7 +17,7 @@ MAPPING = ROOT / "mappings" / "enu.yaml"
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Rig:
+def rig(rig_factory) -> Stack:
     rig = rig_factory()
     rig.start_node(
         "--scene",
@@ -31,7 +31,7 @@ def rig(rig_factory) -> Rig:
 
 
 @pytest.fixture(scope="module")
-def tf_buffer(rig: Rig):
+def tf_buffer(rig: Stack):
     import tf2_ros
 
     buffer = tf2_ros.Buffer()
@@ -56,7 +56,7 @@ def lookup(buffer, frame: str):
     )
 
 
-def test_pose_is_enu_the_drone_4_m_up_is_at_z_plus_4(rig: Rig, tf_buffer):
+def test_pose_is_enu_the_drone_4_m_up_is_at_z_plus_4(rig: Stack, tf_buffer):
     from geometry_msgs.msg import PoseStamped
 
     msg = receive(f"{ROBOT}/actual_pose", PoseStamped)
@@ -71,7 +71,7 @@ def test_pose_is_enu_the_drone_4_m_up_is_at_z_plus_4(rig: Rig, tf_buffer):
     assert position == pytest.approx([0.0, 0.0, 4.0], abs=0.05)
 
 
-def test_optical_frame_z_points_along_the_cameras_view_and_images_carry_it(rig: Rig, tf_buffer):
+def test_optical_frame_z_points_along_the_cameras_view_and_images_carry_it(rig: Stack, tf_buffer):
     from sensor_msgs.msg import CameraInfo, Image
 
     image = receive(f"{ROBOT}/DownCamera/scene_camera/image", Image)
@@ -88,7 +88,7 @@ def test_optical_frame_z_points_along_the_cameras_view_and_images_carry_it(rig: 
     assert body_position == pytest.approx(position, abs=1e-6)
 
 
-def test_depth_centre_pixel_seen_through_the_optical_frame_lands_on_the_ground(rig: Rig, tf_buffer):
+def test_depth_centre_pixel_seen_through_the_optical_frame_lands_on_the_ground(rig: Stack, tf_buffer):
     from sensor_msgs.msg import Image
 
     image = receive(f"{ROBOT}/DownCamera/depth_planar_camera/image", Image)
@@ -98,7 +98,7 @@ def test_depth_centre_pixel_seen_through_the_optical_frame_lands_on_the_ground(r
     assert ground[2] == pytest.approx(0.0, abs=0.1)
 
 
-def test_cloud_ground_points_are_at_z_0_in_map_after_tf(rig: Rig, tf_buffer):
+def test_cloud_ground_points_are_at_z_0_in_map_after_tf(rig: Stack, tf_buffer):
     from sensor_msgs.msg import PointCloud2
 
     cloud = receive(f"{ROBOT}/lidar1/lidar", PointCloud2)
@@ -167,7 +167,7 @@ def radar_block_azimuths(yaw_enu: float) -> np.ndarray:
     return table[block, 1]
 
 
-def test_radar_azimuth_is_positive_to_the_left_as_rep103_says(rig: Rig):
+def test_radar_azimuth_is_positive_to_the_left_as_rep103_says(rig: Stack):
     north = math.pi / 2
     try:
         # turned 30 degrees right of north, BlockNorth (due north) is on the left; turned left, on the right

@@ -10,7 +10,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from bridgeharness import Rig
+from bridgeharness import Stack
 from harness import wait_until
 
 ROBOT = "/airsim_node/Drone1"
@@ -19,7 +19,7 @@ GRAVITY = 9.80665
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Rig:
+def rig(rig_factory) -> Stack:
     rig = rig_factory()
     rig.start_node(
         "--scene", "scene_drone_sensors.jsonc", node_name="extra_bridge", wait_for=f"{ROBOT}/IMU1/imu"
@@ -33,7 +33,7 @@ def receive(topic: str, cls, timeout: float = 20.0):
     return rospy.wait_for_message(topic, cls, timeout=timeout)
 
 
-def test_imu_reads_minus_g_on_body_z_while_hovering_level(rig: Rig):
+def test_imu_reads_minus_g_on_body_z_while_hovering_level(rig: Stack):
     from sensor_msgs.msg import Imu
 
     msg = receive(f"{ROBOT}/IMU1/imu", Imu)
@@ -44,7 +44,7 @@ def test_imu_reads_minus_g_on_body_z_while_hovering_level(rig: Rig):
     assert (q.w, q.x, q.y, q.z) == pytest.approx((1.0, 0.0, 0.0, 0.0), abs=1e-3)
 
 
-def test_gps_fixes_the_home_point_four_metres_up(rig: Rig):
+def test_gps_fixes_the_home_point_four_metres_up(rig: Stack):
     from sensor_msgs.msg import NavSatFix, NavSatStatus
 
     def fixed() -> NavSatFix | None:
@@ -60,7 +60,7 @@ def test_gps_fixes_the_home_point_four_metres_up(rig: Rig):
     assert msg.position_covariance[0] > 0.0
 
 
-def test_barometer_gives_standard_atmosphere_pascals_at_the_drones_altitude(rig: Rig):
+def test_barometer_gives_standard_atmosphere_pascals_at_the_drones_altitude(rig: Stack):
     from sensor_msgs.msg import FluidPressure
 
     msg = receive(f"{ROBOT}/Barometer/barometer", FluidPressure)
@@ -69,7 +69,7 @@ def test_barometer_gives_standard_atmosphere_pascals_at_the_drones_altitude(rig:
     assert msg.header.frame_id == "airsim_node/Drone1"
 
 
-def test_magnetometer_gives_earths_field_in_tesla(rig: Rig):
+def test_magnetometer_gives_earths_field_in_tesla(rig: Stack):
     from sensor_msgs.msg import MagneticField
 
     msg = receive(f"{ROBOT}/Magnetometer/magnetometer", MagneticField)
@@ -79,7 +79,7 @@ def test_magnetometer_gives_earths_field_in_tesla(rig: Rig):
     assert msg.magnetic_field_covariance[0] == pytest.approx(0.005**2 * 1e-8)
 
 
-def test_distance_sensor_ranges_to_the_ground_along_its_downward_x_axis(rig: Rig):
+def test_distance_sensor_ranges_to_the_ground_along_its_downward_x_axis(rig: Stack):
     import rospy
     import tf2_ros
     from sensor_msgs.msg import Range
@@ -98,7 +98,7 @@ def test_distance_sensor_ranges_to_the_ground_along_its_downward_x_axis(rig: Rig
     assert beam == pytest.approx([0.0, 0.0, 1.0], abs=1e-6)  # NED down
 
 
-def test_battery_reports_a_fraction_and_airspeed_zero_pascals_at_hover(rig: Rig):
+def test_battery_reports_a_fraction_and_airspeed_zero_pascals_at_hover(rig: Stack):
     from sensor_msgs.msg import BatteryState, FluidPressure
 
     battery = receive(f"{ROBOT}/Battery/battery", BatteryState)
@@ -111,7 +111,7 @@ def test_battery_reports_a_fraction_and_airspeed_zero_pascals_at_hover(rig: Rig)
     assert airspeed.header.frame_id == "airsim_node/Drone1"
 
 
-def test_odometry_carries_the_pose_and_a_still_twist_while_hovering(rig: Rig):
+def test_odometry_carries_the_pose_and_a_still_twist_while_hovering(rig: Stack):
     from nav_msgs.msg import Odometry
 
     msg = receive(f"{ROBOT}/odom", Odometry)
@@ -143,7 +143,7 @@ PROBE = textwrap.dedent(
 )
 
 
-def test_a_use_sim_time_node_follows_clock_and_it_agrees_with_the_pose_stamps(rig: Rig, tmp_path):
+def test_a_use_sim_time_node_follows_clock_and_it_agrees_with_the_pose_stamps(rig: Stack, tmp_path):
     import subprocess
 
     import rospy

@@ -1,4 +1,4 @@
-"""The seed's documented interface, end to end on the sensors scene: real roscore, real client, headless
+"""The documented interface, end to end on the sensors scene: real roscore, real client, headless
 server, bridge node as a subprocess; this test process is a ROS node that subscribes and looks up tf."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from bridgeharness import Rig, published_topics
+from bridgeharness import Stack, published_topics
 from harness import wait_until
 
 ROBOT = "/airsim_node/Drone1"
@@ -20,7 +20,7 @@ IMAGE_TYPES = (
     "disparity_normalized_camera",
     "surface_normals",
 )
-# Written by hand from the seed's topic list, for sim_config/scene_drone_sensors.jsonc.
+# Written by hand from the documented topic list, for sim_config/scene_drone_sensors.jsonc.
 EXPECTED_PUBLISHED = {
     f"{ROBOT}/actual_pose": "geometry_msgs/PoseStamped",
     f"{ROBOT}/Chase/camera_pose": "geometry_msgs/PoseStamped",
@@ -57,7 +57,7 @@ EXPECTED_SUBSCRIBED = {
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Rig:
+def rig(rig_factory) -> Stack:
     rig = rig_factory()
     rig.start_node(
         "--scene",
@@ -74,7 +74,7 @@ def receive(topic: str, cls, timeout: float = 20.0):
     return rospy.wait_for_message(topic, cls, timeout=timeout)
 
 
-def test_every_documented_topic_is_advertised_with_its_type(rig: Rig):
+def test_every_documented_topic_is_advertised_with_its_type(rig: Stack):
     import rosgraph
 
     pubs, _subs, _srvs = rosgraph.Master("/probe").getSystemState()
@@ -85,7 +85,7 @@ def test_every_documented_topic_is_advertised_with_its_type(rig: Rig):
     assert ours - {"/rosout"} == set(EXPECTED_PUBLISHED)
 
 
-def test_every_documented_command_topic_is_subscribed_with_its_type(rig: Rig):
+def test_every_documented_command_topic_is_subscribed_with_its_type(rig: Stack):
     import rosgraph
     import rospy
 
@@ -100,7 +100,7 @@ def test_every_documented_command_topic_is_subscribed_with_its_type(rig: Rig):
     assert rospy.get_param is not None
 
 
-def test_actual_pose_equals_the_simulators_pose_in_ned(rig: Rig):
+def test_actual_pose_equals_the_simulators_pose_in_ned(rig: Stack):
     from geometry_msgs.msg import PoseStamped
 
     msg = receive(f"{ROBOT}/actual_pose", PoseStamped)
@@ -124,7 +124,7 @@ def test_actual_pose_equals_the_simulators_pose_in_ned(rig: Rig):
 
 
 @pytest.mark.parametrize("kind", IMAGE_TYPES)
-def test_each_image_type_has_its_size_encoding_and_frame(rig: Rig, kind: str):
+def test_each_image_type_has_its_size_encoding_and_frame(rig: Stack, kind: str):
     from sensor_msgs.msg import CameraInfo, Image
 
     image = receive(f"{ROBOT}/DownCamera/{kind}/image", Image)
@@ -143,7 +143,7 @@ def test_each_image_type_has_its_size_encoding_and_frame(rig: Rig, kind: str):
     assert info.distortion_model == "plumb_bob"
 
 
-def test_depth_is_in_metres_to_the_ground_along_the_camera_axis(rig: Rig):
+def test_depth_is_in_metres_to_the_ground_along_the_camera_axis(rig: Stack):
     from sensor_msgs.msg import Image
 
     image = receive(f"{ROBOT}/DownCamera/depth_camera/image", Image)
@@ -156,7 +156,7 @@ def test_depth_is_in_metres_to_the_ground_along_the_camera_axis(rig: Rig):
     assert depth[0, 150:170].mean() == pytest.approx(3.9 / math.sin(math.radians(45 - 36.87)), rel=0.05)
 
 
-def test_point_cloud_points_lie_on_the_ground_in_the_map_frame(rig: Rig):
+def test_point_cloud_points_lie_on_the_ground_in_the_map_frame(rig: Stack):
     from sensor_msgs.msg import PointCloud2
 
     check_cloud_on_ground(receive(f"{ROBOT}/lidar1/lidar", PointCloud2))
@@ -192,7 +192,7 @@ def check_cloud_on_ground(cloud) -> None:
     assert np.all(points["intensity"] >= 0)
 
 
-def test_radar_detects_the_block_ahead(rig: Rig):
+def test_radar_detects_the_block_ahead(rig: Stack):
     from radar_msgs.msg import RadarScan
 
     scan = receive(f"{ROBOT}/radar1/radar_detections", RadarScan)
@@ -205,7 +205,7 @@ def test_radar_detects_the_block_ahead(rig: Rig):
     assert all(math.isfinite(r.amplitude) for r in scan.returns)
 
 
-def test_tf_resolves_every_documented_frame_from_map(rig: Rig):
+def test_tf_resolves_every_documented_frame_from_map(rig: Stack):
     import rospy
     import tf2_ros
 
@@ -230,7 +230,7 @@ def test_tf_resolves_every_documented_frame_from_map(rig: Rig):
     assert (t.x - body.x, t.y - body.y, t.z - body.z) == pytest.approx((0.2, 0.0, 0.1), abs=0.02)
 
 
-def test_camera_pose_topic_is_the_body_pose_moved_by_the_mount(rig: Rig):
+def test_camera_pose_topic_is_the_body_pose_moved_by_the_mount(rig: Stack):
     from geometry_msgs.msg import PoseStamped
 
     cam = receive(f"{ROBOT}/Chase/camera_pose", PoseStamped)
@@ -241,7 +241,7 @@ def test_camera_pose_topic_is_the_body_pose_moved_by_the_mount(rig: Rig):
     assert (dx, dz) == pytest.approx((-8.0, -2.0), abs=0.05)
 
 
-def test_streaming_camera_carries_the_chase_scene_image_and_switch_view_answers(rig: Rig):
+def test_streaming_camera_carries_the_chase_scene_image_and_switch_view_answers(rig: Stack):
     import rospy
     from sensor_msgs.msg import Image
     from std_srvs.srv import Trigger
@@ -253,7 +253,7 @@ def test_streaming_camera_carries_the_chase_scene_image_and_switch_view_answers(
     assert reply.success
 
 
-def test_diagnostics_report_every_bridge_by_its_validate_mapping_name(rig: Rig):
+def test_diagnostics_report_every_bridge_by_its_validate_mapping_name(rig: Stack):
     import rospy
     from diagnostic_msgs.msg import DiagnosticArray
     from sensor_msgs.msg import Image
@@ -282,7 +282,7 @@ def test_diagnostics_report_every_bridge_by_its_validate_mapping_name(rig: Rig):
         sub.unregister()
 
 
-def test_a_lazy_stream_leaves_the_simulator_with_its_last_subscriber(rig: Rig):
+def test_a_lazy_stream_leaves_the_simulator_with_its_last_subscriber(rig: Stack):
     import json
 
     import rospy

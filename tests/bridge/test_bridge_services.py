@@ -8,7 +8,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from bridgeharness import Rig
+from bridgeharness import Stack
 from harness import wait_until
 
 ROBOT = "/airsim_node/Drone1"
@@ -26,7 +26,7 @@ ROBOT_SERVICES = (
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Rig:
+def rig(rig_factory) -> Stack:
     rig = rig_factory()
     rig.start_node(
         "--scene", "scene_drone_sensors.jsonc", node_name="srv_bridge", wait_for=f"{ROBOT}/actual_pose"
@@ -51,7 +51,7 @@ class PoseWatch:
 
 
 @pytest.fixture(scope="module")
-def pose(rig: Rig) -> Iterator[PoseWatch]:
+def pose(rig: Stack) -> Iterator[PoseWatch]:
     watch = PoseWatch()
     yield watch
     watch.sub.unregister()
@@ -72,7 +72,7 @@ def clock_ns() -> int:
     return rospy.wait_for_message("/clock", Clock, timeout=10).clock.to_nsec()
 
 
-def test_every_control_service_is_advertised_with_its_type(rig: Rig):
+def test_every_control_service_is_advertised_with_its_type(rig: Stack):
     import rosgraph
     import rosservice
 
@@ -86,13 +86,13 @@ def test_every_control_service_is_advertised_with_its_type(rig: Rig):
     assert set(names) <= ours
 
 
-def test_api_control_and_arming_services_succeed(rig: Rig):
+def test_api_control_and_arming_services_succeed(rig: Stack):
     for name in ("enable_api_control", "arm", "disarm", "disable_api_control", "enable_api_control", "arm"):
         reply = call(f"{ROBOT}/{name}")
         assert (reply.success, reply.message) == (True, ""), name
 
 
-def test_land_brings_the_drone_to_the_ground_and_takeoff_lifts_it(rig: Rig, pose: PoseWatch):
+def test_land_brings_the_drone_to_the_ground_and_takeoff_lifts_it(rig: Stack, pose: PoseWatch):
     reply = call(f"{ROBOT}/land")
     assert reply.success
     # the reply comes at touchdown; the pose reaches this probe a little later
@@ -107,7 +107,9 @@ def test_land_brings_the_drone_to_the_ground_and_takeoff_lifts_it(rig: Rig, pose
     assert pose.position == pytest.approx(held, abs=0.05)
 
 
-def test_flying_into_a_block_reports_the_collision_and_reset_returns_to_the_origin(rig: Rig, pose: PoseWatch):
+def test_flying_into_a_block_reports_the_collision_and_reset_returns_to_the_origin(
+    rig: Stack, pose: PoseWatch
+):
     import rospy
     from geometry_msgs.msg import PointStamped, PoseStamped, Twist
 
@@ -141,7 +143,7 @@ def test_flying_into_a_block_reports_the_collision_and_reset_returns_to_the_orig
     velocity.unregister()
 
 
-def test_pause_stops_sim_time_step_advances_one_step_and_resume_runs_it_again(rig: Rig):
+def test_pause_stops_sim_time_step_advances_one_step_and_resume_runs_it_again(rig: Stack):
     reply = call("/airsim_node/pause", True)
     try:
         assert reply.success and reply.message.startswith("Sim time paused at t = ")

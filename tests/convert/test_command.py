@@ -14,12 +14,13 @@ from airsim_mapper.convert.command import (
     cmd_vel,
     desired_pose,
     load_scene,
+    require_finite,
     set_bool,
     trigger,
 )
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.mapping.model import Limits, Options
+from airsim_mapper.mapping.model import Limits, Options, PositionBox
 
 H = math.sqrt(0.5)
 
@@ -233,3 +234,43 @@ def test_load_scene_with_an_empty_name_is_rejected(data):
 def test_load_scene_with_non_string_data_is_rejected():
     with pytest.raises(ConversionError, match=r"load_scene: data must be a string, got int"):
         load_scene(String(data=3), ConvertContext())
+
+
+def boxed(on_violation: str):
+    box = PositionBox((-10.0, -10.0, -10.0), (10.0, 10.0, 0.0))
+    return ConvertContext(options=Options(limits=Limits(position_box=box, on_violation=on_violation)))
+
+
+def test_a_pose_outside_the_position_box_is_rejected_or_clamped_into_it():
+    far = PoseStamped(pose=Pose(position=Point(1e308, -3.0, 5.0), orientation=Quaternion(0, 0, 0, 1)))
+    with pytest.raises(ConversionError, match=r"outside the position box \[-10, -10, -10\] .. \[10, 10, 0\]"):
+        desired_pose(far, boxed("reject"))
+    with pytest.raises(ConversionError, match="outside the position box"):
+        camera_desired_pose(far, boxed("reject"))
+    assert desired_pose(far, boxed("clamp"))["position"] == {"x": 10.0, "y": -3.0, "z": 0.0}
+    inside = PoseStamped(pose=Pose(position=Point(1.0, 2.0, -3.0), orientation=Quaternion(0, 0, 0, 1)))
+    assert desired_pose(inside, boxed("reject"))["position"] == {"x": 1.0, "y": 2.0, "z": -3.0}
+
+
+def test_a_command_holding_a_non_finite_number_anywhere_is_refused():
+    require_finite({"vx": 1.0, "pose": {"translation": {"x": 2.0}}, "path": [[1.0, 2.0]], "name": "a"})
+    with pytest.raises(ConversionError, match=r"params.pose.translation.x is inf"):
+        require_finite({"vx": 1.0, "pose": {"translation": {"x": math.inf}}})
+    with pytest.raises(ConversionError, match=r"params.path\[0\]\[1\] is nan"):
+        require_finite({"path": [[1.0, math.nan]]})
+
+
+def test_cmd_vel_clamp_of_a_huge_speed_keeps_its_direction_at_the_limit():
+    params = cmd_vel(twist(1e308, 1e308, 0.0, 0.0), limited(max_linear_speed=20.0))
+    assert (params["vx"], params["vy"]) == pytest.approx((20 * H, 20 * H))
+
+
+def test_load_scene_refuses_a_name_longer_than_its_limit_and_shows_only_its_start():
+    with pytest.raises(ConversionError) as err:
+        load_scene(String(data="s" * 10_000_000), ConvertContext())
+    message = str(err.value)
+    assert len(message) < 400 and "is 10000000 characters long; at most 4096 are accepted" in message
+    seven = ConvertContext(params={"max_length": 7})
+    assert load_scene(String(data="a.jsonc"), seven) == {"scene": "a.jsonc"}
+    with pytest.raises(ConversionError, match="at most 6 are accepted"):
+        load_scene(String(data="a.jsonc"), ConvertContext(params={"max_length": 6}))

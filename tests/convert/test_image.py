@@ -216,7 +216,7 @@ def wire(msg) -> bytes:
 def test_images_go_on_the_wire_byte_for_byte_as_genpy_writes_them():
     from sensor_msgs.msg import Image
 
-    from airsim_mapper.bench.costs import as_genpy
+    from tools.bench.costs import as_genpy
 
     bgr = np.arange(4 * 3 * 3, dtype=np.uint8).reshape(3, 4, 3)
     depth = np.linspace(0.5, 40.0, 12, dtype=np.float16)

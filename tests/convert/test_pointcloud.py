@@ -92,7 +92,7 @@ def test_hundred_thousand_point_scan_converts_in_a_few_milliseconds_plus_list_co
     array_seconds = timed(5, lambda: pointcloud(msg_arrays, CTX))
     list_seconds = timed(2, lambda: pointcloud(msg_lists, CTX))
     assert out.width == 100_000 and len(out.data) == 2_000_000
-    assert array_seconds < 0.05  # ~0.5 ms on an idle machine (bench/converters.py)
+    assert array_seconds < 0.05  # ~0.5 ms on an idle machine (tools/bench/converters.py)
     assert list_seconds < 0.25  # ~25 ms, nearly all of it Python list -> array
 
 

@@ -31,7 +31,3 @@ def test_unknown_converter_suggests_the_closest_name():
 def test_unknown_converter_without_a_close_name_has_no_suggestion():
     with pytest.raises(ConverterNotFound, match=r"^unknown converter 'zzz'$"):
         registry.get("zzz")
-
-
-def test_registry_reexports_convert_stamp():
-    assert registry.convert_stamp(1_500_000_000).to_nsec() == 1_500_000_000

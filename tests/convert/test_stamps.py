@@ -66,3 +66,8 @@ def test_header_without_a_time_stamp_is_rejected():
 def test_header_of_a_non_map_is_rejected():
     with pytest.raises(ConversionError, match=r"message must be a map, got list"):
         header([], ConvertContext())
+
+
+def test_a_ros_stamp_without_a_clock_is_a_conversion_error():
+    with pytest.raises(ConversionError, match="stamp 'ros' needs the node's clock"):
+        header({"time_stamp": 7}, ConvertContext(stamp="ros"))

@@ -250,6 +250,7 @@ PROBE = (
 )
 
 
+@pytest.mark.live
 def test_tune_process_installs_both_settings_and_can_be_turned_off() -> None:
     run = {"capture_output": True, "text": True, "check": True}
     out = subprocess.run([sys.executable, "-c", PROBE], **run).stdout.split()
@@ -300,6 +301,7 @@ print(frozen, gc.get_freeze_count(), after < before / 5, leaked_while_frozen, al
 """
 
 
+@pytest.mark.live
 def test_a_frozen_heap_is_skipped_by_full_collections_and_thawing_frees_old_cycles() -> None:
     run = {"capture_output": True, "text": True, "check": True}
     frozen, thawed, faster, held, freed = subprocess.run(

@@ -13,7 +13,7 @@ from airsim_mapper.cli.validate import main
 
 BROKEN = Path(__file__).resolve().parent / "broken"
 CORPUS = sorted(BROKEN.glob("*.yaml"))
-RUN_AS_SUBPROCESS = ("unknown_key.yaml", "tabs.yaml", "python_tag.yaml", "empty.yaml")
+RUN_AS_SUBPROCESS = ("unknown_key.yaml", "tabs.yaml", "python_tag.yaml", "empty.yaml", "alias_bomb.yaml")
 
 
 def expectations(path: Path) -> list[str]:
@@ -37,6 +37,7 @@ def test_the_corpus_covers_every_kind_of_mistake_and_states_its_expected_message
         "empty",
         "top_level_list",
         "python_tag",
+        "alias_bomb",
     ):
         assert f"{kind}.yaml" in names
     assert all(expectations(path) for path in CORPUS)
@@ -54,6 +55,7 @@ def test_validate_mapping_rejects_the_broken_mapping_with_its_precise_error(path
         assert any(got.startswith(line) for got in reported), f"{line!r} not in {reported!r}"
 
 
+@pytest.mark.live
 @pytest.mark.parametrize("name", RUN_AS_SUBPROCESS)
 def test_the_installed_command_exits_1_with_the_error_on_stderr(name):
     path = BROKEN / name

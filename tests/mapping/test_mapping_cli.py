@@ -6,13 +6,16 @@ import json
 import subprocess
 
 import pytest
-from harness import ROOT, SIM_CONFIG, VENV_BIN
+from harness import EXAMPLE_CONFIG, ROOT, SIM_CONFIG, VENV_BIN
+from simconfigs import both_configs
 
 from airsim_mapper.cli.validate import format_table, load_and_expand, main
 from airsim_mapper.mapping.errors import ConfigError, MappingError
 from airsim_mapper.scene import SceneError
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
+# bridges for scene_drone_sensors.jsonc: the project's sensor drone also has radar1 (detections, tracks, tf)
+SENSORS_SCENE_BRIDGES = {SIM_CONFIG: 65, EXAMPLE_CONFIG: 62}
 
 
 def test_a_valid_mapping_without_a_scene_exits_0_and_lists_its_rules(capsys):
@@ -22,7 +25,9 @@ def test_a_valid_mapping_without_a_scene_exits_0_and_lists_its_rules(capsys):
     assert out.rstrip().endswith("valid, 42 rules")
 
 
-def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene():
+@pytest.mark.live
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene(sim_config):
     result = subprocess.run(
         [
             str(VENV_BIN / "validate-mapping"),
@@ -30,7 +35,7 @@ def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene(
             "--scene",
             "scene_drone_sensors.jsonc",
             "--simconfigpath",
-            str(SIM_CONFIG),
+            str(sim_config),
         ],
         capture_output=True,
         text=True,
@@ -40,7 +45,7 @@ def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene(
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[0].split() == ["DIRECTION", "SIMULATOR", "ROS", "TYPE", "FRAME"]
-    assert lines[-1] == "62 bridges"
+    assert lines[-1] == f"{SENSORS_SCENE_BRIDGES[sim_config]} bridges"
     pose = next(line for line in lines if " /airsim_node/Drone1/actual_pose " in line)
     assert pose.split() == [
         "sim_to_ros",
@@ -52,7 +57,7 @@ def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene(
 
 
 def test_json_format_prints_one_array_of_bridges_with_the_documented_keys(capsys):
-    argv = [str(DEFAULT), "--scene", "scene_lidar_drone.jsonc", "--simconfigpath", str(SIM_CONFIG)]
+    argv = [str(DEFAULT), "--scene", "scene_survey_drone.jsonc", "--simconfigpath", str(SIM_CONFIG)]
     assert main([*argv, "--format", "json", "--nodename", "bridge7"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert all(
@@ -69,7 +74,7 @@ def test_json_format_prints_one_array_of_bridges_with_the_documented_keys(capsys
     )
     lidar = next(row for row in rows if row["rule"] == "lidar_tf")
     assert (lidar["sim"], lidar["converter"], lidar["ros"]) == (
-        "/Sim/SceneLidarDrone/robots/Drone1/actual_pose",
+        "/Sim/SceneSurveyDrone/robots/Drone1/actual_pose",
         "sensor_pose",
         None,
     )

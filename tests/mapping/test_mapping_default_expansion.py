@@ -1,9 +1,13 @@
-"""The default mapping expands every shared scene to exactly the documented interface."""
+"""The default mapping expands every scene to exactly the documented interface: the project's own scenes,
+and Project AirSim's example scenes where present."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
-from harness import ROOT, SIM_CONFIG
+from harness import EXAMPLE_CONFIG, ROOT, SIM_CONFIG
+from simconfigs import EXAMPLE_SCENES, both_configs, scenes_of
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
@@ -33,7 +37,8 @@ def _robot_extras(robot: str) -> list[str]:
 
 
 def _instruments(robot: str) -> list[str]:
-    """robot_quadrotor_fastphysics_sensors.jsonc's instruments, one topic each."""
+    """The instruments of robot_quadrotor_sensors.jsonc and robot_quadrotor_survey.jsonc (project) and of
+    robot_quadrotor_fastphysics_sensors.jsonc (example), one topic each."""
     base = f"/airsim_node/{robot}"
     return [
         f"{base}/IMU1/imu",
@@ -46,7 +51,7 @@ def _instruments(robot: str) -> list[str]:
     ]
 
 
-# scene_drone_sensors.jsonc, written out in full from the seed's topic list.
+# the example scene_drone_sensors.jsonc, written out in full from the documented topic list.
 DRONE_SENSORS_TOPICS = [
     LOAD_SCENE,
     "/airsim_node/Drone1/actual_pose",
@@ -80,7 +85,8 @@ DRONE_SENSORS_TOPICS = [
 
 
 def _basic_drone(robot: str) -> list[str]:
-    """robot_quadrotor_fastphysics.jsonc: Chase (scene), DownCamera (scene, depth); no lidar or radar."""
+    """robot_quadrotor_basic.jsonc (project) and robot_quadrotor_fastphysics.jsonc (example): Chase (scene),
+    DownCamera (scene, depth); no lidar or radar."""
     return [
         f"/airsim_node/{robot}/actual_pose",
         f"/airsim_node/{robot}/cmd_vel",
@@ -100,7 +106,91 @@ def _basic_drone(robot: str) -> list[str]:
     ]
 
 
-EXPECTED = {
+def _robot(robot: str) -> list[str]:
+    """The pose, command and service topics every robot gets."""
+    base = f"/airsim_node/{robot}"
+    return [f"{base}/actual_pose", f"{base}/cmd_vel", f"{base}/desired_pose", *_robot_extras(robot)]
+
+
+def _camera(robot: str, camera: str, *image_types: str) -> list[str]:
+    """A camera's pose topics, and an image and a camera_info topic per capture-enabled image type."""
+    base = f"/airsim_node/{robot}/{camera}"
+    per_type = [
+        f"{base}/{image_type}/{leaf}" for image_type in image_types for leaf in ("image", "camera_info")
+    ]
+    return [f"{base}/desired_pose", f"{base}/camera_pose", *per_type]
+
+
+def _sensor_quadrotor(robot: str) -> list[str]:
+    """robot_quadrotor_sensors.jsonc: Chase (scene), DownCamera (all seven types), lidar1, radar1, and every
+    instrument."""
+    all_types = (
+        "scene_camera",
+        "depth_planar_camera",
+        "depth_camera",
+        "segmentation_camera",
+        "depth_vis_camera",
+        "disparity_normalized_camera",
+        "surface_normals",
+    )
+    return [
+        *_robot(robot),
+        *_camera(robot, "Chase", "scene_camera"),
+        *_camera(robot, "DownCamera", *all_types),
+        f"/airsim_node/{robot}/lidar1/lidar",
+        f"/airsim_node/{robot}/radar1/radar_detections",
+        f"/airsim_node/{robot}/radar1/radar_tracks",
+        *_instruments(robot),
+    ]
+
+
+def _camera_quadrotor(robot: str) -> list[str]:
+    """robot_quadrotor_camera.jsonc: FrontCamera (scene, depth planar) and IMU1."""
+    camera = _camera(robot, "FrontCamera", "scene_camera", "depth_planar_camera")
+    return [*_robot(robot), *camera, f"/airsim_node/{robot}/IMU1/imu"]
+
+
+def _survey_quadrotor(robot: str) -> list[str]:
+    """robot_quadrotor_survey.jsonc: lidar1 and every instrument; no camera."""
+    return [*_robot(robot), f"/airsim_node/{robot}/lidar1/lidar", *_instruments(robot)]
+
+
+def _radar_mast(robot: str) -> list[str]:
+    """robot_radar_tower.jsonc: radar1 only."""
+    radar = f"/airsim_node/{robot}/radar1"
+    return [*_robot(robot), f"{radar}/radar_detections", f"{radar}/radar_tracks"]
+
+
+# the project's scenes (sim_config/); a scene without a streaming camera has no streaming bridges
+PROJECT_EXPECTED = {
+    "scene_basic_drone.jsonc": [LOAD_SCENE, *SCENE_WIDE, *_basic_drone("Drone1"), *STREAMING],
+    "scene_drone_sensors.jsonc": [LOAD_SCENE, *SCENE_WIDE, *_sensor_quadrotor("Drone1"), *STREAMING],
+    "scene_radar_tower.jsonc": [
+        LOAD_SCENE,
+        *SCENE_WIDE,
+        *_basic_drone("Drone1"),
+        *_radar_mast("RadarTower1"),
+        *STREAMING,
+    ],
+    "scene_survey_drone.jsonc": [LOAD_SCENE, *SCENE_WIDE, *_survey_quadrotor("Drone1")],
+    "scene_two_drones.jsonc": [
+        LOAD_SCENE,
+        *SCENE_WIDE,
+        *_camera_quadrotor("Drone1"),
+        *_camera_quadrotor("Drone2"),
+        *STREAMING,
+    ],
+    "scene_two_drones_mixed.jsonc": [
+        LOAD_SCENE,
+        *SCENE_WIDE,
+        *_basic_drone("Drone1"),
+        *_sensor_quadrotor("Drone2"),
+        *STREAMING,
+    ],
+}
+
+# Project AirSim's example scenes (../shared/sim_config)
+EXAMPLE_EXPECTED = {
     "scene_basic_drone.jsonc": [LOAD_SCENE, *SCENE_WIDE, *_basic_drone("Drone1"), *STREAMING],
     "scene_drone_sensors.jsonc": [*SCENE_WIDE, *DRONE_SENSORS_TOPICS],
     "scene_lidar_drone.jsonc": [
@@ -132,25 +222,41 @@ EXPECTED = {
 }
 
 
+EXPECTED: dict[Path, dict[str, list[str]]] = {SIM_CONFIG: PROJECT_EXPECTED, EXAMPLE_CONFIG: EXAMPLE_EXPECTED}
+RADAR_SCENE_ID = {SIM_CONFIG: "SceneRadarTower", EXAMPLE_CONFIG: "SceneRadarDrone"}
+
+
 @pytest.fixture(scope="module")
 def default_mapping():
     return load_mapping(DEFAULT)
 
 
-def test_every_shared_scene_has_an_expected_topic_list():
-    assert sorted(path.name for path in SIM_CONFIG.glob("scene_*.jsonc")) == sorted(EXPECTED)
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_every_scene_has_an_expected_topic_list(sim_config):
+    assert sorted(path.name for path in sim_config.glob("scene_*.jsonc")) == sorted(EXPECTED[sim_config])
 
 
-@pytest.mark.parametrize("scene_file", sorted(EXPECTED))
-def test_default_mapping_expands_each_scene_to_exactly_the_documented_topics(default_mapping, scene_file):
-    bridges = expand(default_mapping, read_scene(SIM_CONFIG, scene_file), "projectairsim")
+def test_the_compatibility_tests_cover_the_example_scenes_of_this_catalogue():
+    assert sorted(EXAMPLE_SCENES) == sorted(EXAMPLE_EXPECTED)
+
+
+@pytest.mark.parametrize(
+    ("sim_config", "scene_file"), scenes_of(PROJECT_EXPECTED, EXAMPLE_EXPECTED), indirect=["sim_config"]
+)
+def test_default_mapping_expands_each_scene_to_exactly_the_documented_topics(
+    default_mapping, sim_config, scene_file
+):
+    bridges = expand(default_mapping, read_scene(sim_config, scene_file), "projectairsim")
     topics = [bridge.ros for bridge in bridges if bridge.ros is not None]
-    assert sorted(topics) == sorted(EXPECTED[scene_file])
+    assert sorted(topics) == sorted(EXPECTED[sim_config][scene_file])
     assert len(topics) == len(set(topics))
 
 
-def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sensors(default_mapping):
-    bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_drone_sensors.jsonc"), "projectairsim")
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sensors(
+    default_mapping, sim_config
+):
+    bridges = expand(default_mapping, read_scene(sim_config, "scene_drone_sensors.jsonc"), "projectairsim")
     by_ros = {bridge.ros: bridge for bridge in bridges}
     pose = by_ros["/airsim_node/Drone1/actual_pose"]
     assert (pose.ros_type, pose.frame_id, pose.options.latch, pose.options.lazy) == (
@@ -190,8 +296,11 @@ def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sens
     assert {b.convention for b in bridges} == {"ned"}
 
 
-def test_default_mapping_broadcasts_one_camera_frame_per_capture_enabled_image_type(default_mapping):
-    bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_basic_drone.jsonc"), "projectairsim")
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_default_mapping_broadcasts_one_camera_frame_per_capture_enabled_image_type(
+    default_mapping, sim_config
+):
+    bridges = expand(default_mapping, read_scene(sim_config, "scene_basic_drone.jsonc"), "projectairsim")
     children = sorted(bridge.tf.child for bridge in bridges if bridge.ros is None)
     assert children == [
         "airsim_node/Drone1/Chase/scene_camera",
@@ -200,8 +309,9 @@ def test_default_mapping_broadcasts_one_camera_frame_per_capture_enabled_image_t
     ]
 
 
-def test_radar_bridges_use_the_radar_frame_and_its_tf_comes_from_the_towers_pose(default_mapping):
-    bridges = expand(default_mapping, read_scene(SIM_CONFIG, "scene_radar_tower.jsonc"), "projectairsim")
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_radar_bridges_use_the_radar_frame_and_its_tf_comes_from_the_towers_pose(default_mapping, sim_config):
+    bridges = expand(default_mapping, read_scene(sim_config, "scene_radar_tower.jsonc"), "projectairsim")
     radar = [b for b in bridges if b.variables.get("radar_name") == "radar1" and b.ros is not None]
     assert [(b.ros_type, b.frame_id) for b in radar] == [
         ("radar_msgs/RadarScan", "airsim_node/RadarTower1/radar1"),
@@ -210,7 +320,7 @@ def test_radar_bridges_use_the_radar_frame_and_its_tf_comes_from_the_towers_pose
     assert (radar[0].tf, radar[1].tf) == (None, None)
     (frame,) = [b for b in bridges if b.name == "radar_tf[RadarTower1/radar1]"]
     assert (frame.sim, frame.converter, frame.tf.child, frame.options.lazy) == (
-        "/Sim/SceneRadarDrone/robots/RadarTower1/actual_pose",
+        f"/Sim/{RADAR_SCENE_ID[sim_config]}/robots/RadarTower1/actual_pose",
         "sensor_pose",
         "airsim_node/RadarTower1/radar1",
         False,

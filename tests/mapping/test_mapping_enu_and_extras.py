@@ -2,22 +2,32 @@
 
 from __future__ import annotations
 
+import functools
+from pathlib import Path
+
 import pytest
 from harness import ROOT, SIM_CONFIG
+from simconfigs import EXAMPLE_SCENES, scenes_of
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
-from airsim_mapper.scene import read_scene
+from airsim_mapper.scene import Scene, read_scene
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
 ENU = ROOT / "mappings" / "enu.yaml"
 SCENES = sorted(path.name for path in SIM_CONFIG.glob("scene_*.jsonc"))
 
 
+@functools.cache
+def read_once(sim_config: Path, name: str) -> Scene:
+    """A scene, read once per test run (reading a scene costs about half a second)."""
+    return read_scene(sim_config, name)
+
+
 @pytest.fixture(scope="module")
 def scenes() -> dict:
-    """Every shared scene, read once (reading a scene costs about half a second)."""
-    return {name: read_scene(SIM_CONFIG, name) for name in SCENES}
+    """Every scene of the project's own sim_config/."""
+    return {name: read_once(SIM_CONFIG, name) for name in SCENES}
 
 
 @pytest.fixture(scope="module")
@@ -35,11 +45,14 @@ def by_ros(mapping, scene) -> dict:
     return {bridge.ros: bridge for bridge in bridges if bridge.ros is not None}
 
 
-@pytest.mark.parametrize("scene_file", SCENES)
+@pytest.mark.parametrize(
+    ("sim_config", "scene_file"), scenes_of(SCENES, EXAMPLE_SCENES), indirect=["sim_config"]
+)
 def test_enu_mapping_has_the_default_mappings_ros_names_and_types_on_every_scene(
-    default_mapping, enu_mapping, scenes, scene_file
+    default_mapping, enu_mapping, sim_config, scene_file
 ):
-    default, enu = by_ros(default_mapping, scenes[scene_file]), by_ros(enu_mapping, scenes[scene_file])
+    scene = read_once(sim_config, scene_file)
+    default, enu = by_ros(default_mapping, scene), by_ros(enu_mapping, scene)
     assert {name: b.ros_type for name, b in enu.items()} == {name: b.ros_type for name, b in default.items()}
     assert {b.convention for b in enu.values()} == {"enu"}
 
@@ -55,7 +68,7 @@ def test_enu_mapping_uses_rep103_frame_names(enu_mapping, scenes):
     assert ros["/airsim_streaming_camera/image_raw"].frame_id == "Drone1/Chase/scene_camera_optical"
     assert ros[f"{robot}/lidar1/lidar"].frame_id == "Drone1/lidar1"
     assert ros[f"{robot}/IMU1/imu"].frame_id == "Drone1/base_link"
-    assert dict(ros[f"{robot}/odom"].params) == {"child_frame_id": "<frame_prefix><robot_name>/base_link"}
+    assert dict(ros[f"{robot}/odom"].params) == {"child_frame_id": "Drone1/base_link"}
     tf_only = sorted((b.converter, b.tf.child) for b in bridges if b.ros is None and "Chase" in b.tf.child)
     assert tf_only == [
         ("camera_optical_pose", "Drone1/Chase/scene_camera_optical"),
@@ -64,12 +77,12 @@ def test_enu_mapping_uses_rep103_frame_names(enu_mapping, scenes):
 
 
 def test_clock_comes_once_per_scene_from_the_first_robots_pose(default_mapping, scenes):
-    bridges = expand(default_mapping, scenes["scene_two_drones_sensors.jsonc"], "n")
+    bridges = expand(default_mapping, scenes["scene_two_drones_mixed.jsonc"], "n")
     clocks = [b for b in bridges if b.ros == "/clock"]
     assert [(b.name, b.sim, b.ros_type, b.converter) for b in clocks] == [
         (
-            "clock[SceneTwoDrones]",
-            "/Sim/SceneTwoDrones/robots/Drone1/actual_pose",
+            "clock[SceneTwoDronesMixed]",
+            "/Sim/SceneTwoDronesMixed/robots/Drone1/actual_pose",
             "rosgraph_msgs/Clock",
             "clock",
         )

@@ -181,3 +181,19 @@ def test_a_namespace_prefixes_every_topic_and_frame_of_the_default_mapping():
     assert all(b.ros.startswith("/sim2/") for b in bridges if b.ros)
     frames = [f for b in bridges for f in (b.frame_id, *((b.tf.parent, b.tf.child) if b.tf else ())) if f]
     assert frames and all(f.startswith("sim2/") for f in frames)
+
+
+def test_template_strings_in_params_are_rendered_per_element_and_other_values_are_kept():
+    from harness import ROOT
+
+    from airsim_mapper.mapping.loader import load_mapping
+
+    scene = read_scene(ROOT / "sim_config", "scene_two_drones.jsonc")
+    bridges = expand(load_mapping("default"), scene, "n", "sim2")
+    odom = {b.variables["robot_name"]: b.params for b in bridges if b.converter == "odometry"}
+    assert odom == {
+        "Drone1": {"child_frame_id": "sim2/airsim_node/Drone1"},
+        "Drone2": {"child_frame_id": "sim2/airsim_node/Drone2"},
+    }
+    takeoff = next(b for b in bridges if b.params.get("method") == "Takeoff")
+    assert takeoff.params == {"method": "Takeoff", "args": {"timeout_sec": 20}}

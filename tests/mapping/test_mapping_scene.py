@@ -6,15 +6,32 @@ import json
 import os
 
 import pytest
-from harness import SIM_CONFIG
+from harness import EXAMPLE_CONFIG, SIM_CONFIG
 from scene_builders import camera, capture
+from simconfigs import both_configs
 
 from airsim_mapper.scene import SceneError, read_scene, scene_from_config
 
+# two different drones, Drone1 the plain one with a disabled GPS: file, scene id, Drone2's origin
+TWO_DRONE_SCENES = {
+    SIM_CONFIG: (
+        "scene_two_drones_mixed.jsonc",
+        "SceneTwoDronesMixed",
+        {"geo-point": "47.641468 -122.140125 126.0", "rpy": "0 0 0"},
+    ),
+    EXAMPLE_CONFIG: (
+        "scene_two_drones_sensors.jsonc",
+        "SceneTwoDrones",
+        {"xyz": "0.0 2.0 -4.0", "rpy-deg": "0 0 0"},
+    ),
+}
 
-def test_reads_robots_sensors_and_capture_settings_as_the_simulator_receives_them():
-    scene = read_scene(SIM_CONFIG, "scene_two_drones_sensors.jsonc")
-    assert scene.name == "SceneTwoDrones"
+
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_reads_robots_sensors_and_capture_settings_as_the_simulator_receives_them(sim_config):
+    scene_file, scene_id, drone2_origin = TWO_DRONE_SCENES[sim_config]
+    scene = read_scene(sim_config, scene_file)
+    assert scene.name == scene_id
     assert [robot.name for robot in scene.robots] == ["Drone1", "Drone2"]
     drone2 = scene.robots[1]
     assert [s.id for s in drone2.enabled_sensors("lidar")] == ["lidar1"]
@@ -23,7 +40,7 @@ def test_reads_robots_sensors_and_capture_settings_as_the_simulator_receives_the
     down = next(s for s in drone2.sensors if s.id == "DownCamera")
     assert [c.image_type for c in down.captures if c.capture_enabled] == [0, 1, 2, 3, 4, 5, 6]
     assert "robot-config" not in drone2.actor
-    assert drone2.actor["origin"] == {"xyz": "0.0 2.0 -4.0", "rpy-deg": "0 0 0"}
+    assert drone2.actor["origin"] == drone2_origin
     # the merged config inlines the robot config, as the client sends it with /Sim/LoadScene
     assert scene.config["actors"][1]["robot-config"]["sensors"][0]["id"] == "Chase"
     assert [(c.robot_name, c.camera_name) for c in scene.streaming_cameras] == [
@@ -138,9 +155,9 @@ def test_reading_a_scene_leaves_no_client_log_file_behind(write_scene, monkeypat
 
 
 def test_a_scene_can_be_built_from_a_merged_config_like_world_get_configuration():
-    merged = read_scene(SIM_CONFIG, "scene_lidar_drone.jsonc").config
-    scene = scene_from_config(merged, "scene_lidar_drone.jsonc", SIM_CONFIG)
-    assert (scene.name, [r.name for r in scene.robots]) == ("SceneLidarDrone", ["Drone1"])
+    merged = read_scene(SIM_CONFIG, "scene_survey_drone.jsonc").config
+    scene = scene_from_config(merged, "scene_survey_drone.jsonc", SIM_CONFIG)
+    assert (scene.name, [r.name for r in scene.robots]) == ("SceneSurveyDrone", ["Drone1"])
     assert [s.id for s in scene.robots[0].enabled_sensors("lidar")] == ["lidar1"]
 
 

@@ -42,6 +42,7 @@ def test_committed_interface_docs_equal_the_commands_output(doc: str, mapping: s
     )
 
 
+@pytest.mark.live
 def test_the_console_script_runs_the_topics_command():
     result = subprocess.run(
         [str(VENV_BIN / "airsim-mapper"), "topics", "--help"], capture_output=True, text=True, timeout=60

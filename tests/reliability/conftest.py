@@ -6,12 +6,12 @@ import os
 from collections.abc import Iterator
 
 import pytest
-from harness import Launcher, RosMaster, start_master
+from harness import Rig, RosMaster
 
 
 @pytest.fixture(scope="module")
-def module_launcher(tmp_path_factory) -> Iterator[Launcher]:
-    launcher = Launcher(tmp_path_factory.mktemp("reliability"), dict(os.environ))
+def module_launcher(tmp_path_factory) -> Iterator[Rig]:
+    launcher = Rig(tmp_path_factory.mktemp("reliability"), dict(os.environ))
     try:
         yield launcher
     finally:
@@ -20,5 +20,5 @@ def module_launcher(tmp_path_factory) -> Iterator[Launcher]:
 
 
 @pytest.fixture(scope="module")
-def module_master(module_launcher: Launcher) -> RosMaster:
-    return start_master(module_launcher)
+def module_master(module_launcher: Rig) -> RosMaster:
+    return module_launcher.roscore()

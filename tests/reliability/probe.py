@@ -1,13 +1,15 @@
 """Probe node for the reliability tests (run as a subprocess; prints what it sees, one line each).
 
 probe.py watch TOPIC           print "MSG <wall time>" for every message on TOPIC (any type)
-probe.py status NODE           print "STATUS <json>" for every status message of bridge node NODE
+probe.py status NODE           print "STATUST <wall time>" and "STATUS <json>" for every status message of
+                               bridge node NODE
 probe.py twist TOPIC N VX [FRAME]   publish N geometry_msgs/Twist at 10 Hz (VX may be nan, inf),
                                then print "LAST <wall time>" and keep the publisher until killed
 probe.py pose TOPIC X Y Z QW QX QY QZ [FRAME]   publish one PoseStamped 3 times, print "SENT"
 probe.py trials TOPIC N VX SERVICESPORT ROBOT   watchdog trials: print "TRIAL <seconds>" per trial
 probe.py bad ROBOT_PREFIX CAMERA  publish malformed cmd_vel and desired_pose messages, print "SENT <n>"
 probe.py strings TOPIC DATA...  publish each DATA as a std_msgs/String, 0.5 s apart, then print "SENT"
+probe.py huge TOPIC N SIZE      publish N distinct std_msgs/String of SIZE characters, 0.05 s apart, "SENT"
 """
 
 from __future__ import annotations
@@ -37,7 +39,10 @@ def watch(topic: str) -> None:
 def status(node: str) -> None:
     from std_msgs.msg import String
 
-    rospy.Subscriber(f"/airsim_mapper/{node}/status", String, lambda m: print("STATUS " + m.data, flush=True))
+    def show(message: String) -> None:
+        print(f"STATUST {time.time():.4f}\nSTATUS {message.data}", flush=True)
+
+    rospy.Subscriber(f"/airsim_mapper/{node}/status", String, show)
     rospy.spin()
 
 
@@ -79,6 +84,18 @@ def strings(topic: str, items: list[str]) -> None:
     for item in items:
         pub.publish(String(data=item))
         time.sleep(0.5)
+    print("SENT", flush=True)
+    rospy.spin()
+
+
+def huge(topic: str, count: int, size: int) -> None:
+    from std_msgs.msg import String
+
+    pub = rospy.Publisher(topic, String, queue_size=count)
+    connected(pub)
+    for index in range(count):
+        pub.publish(String(data=f"{index:04d}" + "x" * (size - 4)))
+        time.sleep(0.05)
     print("SENT", flush=True)
     rospy.spin()
 
@@ -171,6 +188,8 @@ def main(argv: list[str]) -> None:
         pose(args[0], [float(v) for v in args[1:8]], args[8] if len(args) > 8 else "map")
     elif mode == "bad":
         bad(args[0], args[1])
+    elif mode == "huge":
+        huge(args[0], int(args[1]), int(args[2]))
     elif mode == "strings":
         strings(args[0], args[1:])
     elif mode == "trials":

@@ -10,13 +10,12 @@ import json
 import math
 import os
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
-from harness import ROOT, Launcher, Process, free_port, wait_until
-from simharness import ADDRESS, port_open
+from harness import ROOT, Child, Rig, SimPorts, wait_until
 
-NODE_SCRIPT = ROOT / "scripts" / "projectairsim_node.py"
+from tools.rig import LOOPBACK
+
 PROJECT_SIM_CONFIG = ROOT / "sim_config"
 PROBE = Path(__file__).resolve().parent / "probe.py"
 SCENE = "scene_drone_sensors.jsonc"
@@ -24,51 +23,22 @@ ROBOT = "/airsim_node/Drone1"
 SIM_ROBOT = "/Sim/SceneDroneSensors/robots/Drone1"
 
 
-@dataclass(frozen=True)
-class Ports:
-    topics: int
-    services: int
-
-    @classmethod
-    def free(cls) -> Ports:
-        topics = free_port()
-        services = free_port()
-        while services == topics:
-            services = free_port()
-        return cls(topics, services)
-
-
-def start_server(launcher: Launcher, ports: Ports, wait: bool = True) -> Process:
+def start_server(launcher: Rig, ports: SimPorts, wait: bool = True) -> Child:
     """The headless server on the given ports (so a restarted one is found at the same address)."""
-    argv = ["-m", "airsim_mapper.simserver", "--address", ADDRESS]
-    argv += ["--topicsport", str(ports.topics), "--servicesport", str(ports.services)]
-    process = launcher.python("simserver", argv)
-    if wait:
-        wait_until(
-            lambda: port_open(ADDRESS, ports.topics) and port_open(ADDRESS, ports.services),
-            30,
-            what="the simulator's ports",
-        )
-    return process
+    return launcher.simserver(ports=ports, wait=wait).process
 
 
 def start_node(
-    launcher: Launcher,
-    ports: Ports,
-    *args: str,
-    node_name: str = "rel",
-    sim_config: Path = PROJECT_SIM_CONFIG,
-) -> Process:
-    argv = [str(NODE_SCRIPT), "--topicsport", str(ports.topics), "--servicesport", str(ports.services)]
-    argv += ["--simconfigpath", str(sim_config), "--nodename", node_name, *args]
-    return launcher.python(f"node_{node_name}", argv)
+    launcher: Rig, ports: SimPorts, *args: str, node_name: str = "rel", sim_config: Path = PROJECT_SIM_CONFIG
+) -> Child:
+    return launcher.node(ports, *args, node_name=node_name, sim_config=sim_config)
 
 
-def probe(launcher: Launcher, name: str, *args: str) -> Process:
+def probe(launcher: Rig, name: str, *args: str) -> Child:
     return launcher.python(f"probe_{name}", [str(PROBE), *args])
 
 
-def wait_output(process: Process, text: str, timeout: float, start: int = 0) -> None:
+def wait_output(process: Child, text: str, timeout: float, start: int = 0) -> None:
     """Wait until `text` appears in the process's output after character `start`."""
 
     def seen() -> bool:
@@ -79,12 +49,12 @@ def wait_output(process: Process, text: str, timeout: float, start: int = 0) -> 
     wait_until(seen, timeout, interval=0.05, what=f"{text!r} from {process.name}")
 
 
-def stamps(process: Process, tag: str = "MSG") -> list[float]:
+def stamps(process: Child, tag: str = "MSG") -> list[float]:
     """The wall-clock receive times a `probe.py watch` printed."""
     return [float(line.split()[1]) for line in process.output().splitlines() if line.startswith(tag + " ")]
 
 
-def statuses(process: Process) -> list[dict]:
+def statuses(process: Child) -> list[dict]:
     """The status messages a `probe.py status` printed, in order."""
     prefix = "STATUS "
     return [
@@ -99,10 +69,10 @@ def task_and_fd_counts(pid: int) -> tuple[int, int]:
 class SimView:
     """A services-only client for reading the robot's ground truth and sending setup commands."""
 
-    def __init__(self, ports: Ports) -> None:
+    def __init__(self, ports: SimPorts) -> None:
         from projectairsim import ProjectAirSimClient
 
-        self.client = ProjectAirSimClient(ADDRESS, ports.topics, ports.services)
+        self.client = ProjectAirSimClient(LOOPBACK, ports.topics, ports.services)
         self.client.connect_services()
 
     def call(self, method: str, **params) -> object:
@@ -127,7 +97,7 @@ class SimView:
         self.client.socket_services.close()
 
 
-def restart_master(launcher: Launcher, master) -> Process:
+def restart_master(launcher: Rig, master) -> Child:
     """Kill the master and start a new one on the same port (the nodes keep running)."""
     import rosgraph
 
@@ -144,3 +114,32 @@ def restart_master(launcher: Launcher, master) -> Process:
 
     wait_until(up, 30, what="the restarted master")
     return process
+
+
+def unshare_available() -> bool:
+    """`unshare --pid` works here (root, util-linux): a master can get a fresh PID namespace."""
+    import shutil
+    import subprocess
+
+    if os.geteuid() != 0 or shutil.which("unshare") is None:
+        return False
+    probe_run = subprocess.run(
+        ["unshare", "--pid", "--fork", "--kill-child", "--mount-proc", "true"],
+        capture_output=True,
+        timeout=10,
+    )
+    return probe_run.returncode == 0
+
+
+def start_namespaced_master(launcher: Rig, port: int, env: dict[str, str]) -> Child:
+    """roscore in a PID namespace of its own, as in a container: rosmaster gets the same pid every time."""
+    argv = ["unshare", "--pid", "--fork", "--kill-child", "--mount-proc", "roscore", "-p", str(port)]
+    return launcher.start("roscore_ns", argv, env=env)
+
+
+def node_registrations(master_uri: str, node: str) -> tuple[int, int, int]:
+    """How many publications, subscriptions and services the master has for `node`."""
+    import rosgraph
+
+    publishers, subscribers, services = rosgraph.Master("/relkit", master_uri=master_uri).getSystemState()
+    return tuple(sum(node in nodes for _name, nodes in rows) for rows in (publishers, subscribers, services))

@@ -9,14 +9,13 @@ import sys
 from pathlib import Path
 
 import pytest
-from harness import ROOT, Launcher, RosMaster, wait_until
+from harness import ROOT, Rig, RosMaster, wait_until
 
 from reliability.relkit import (
-    NODE_SCRIPT,
     PROJECT_SIM_CONFIG,
     ROBOT,
     SCENE,
-    Ports,
+    SimPorts,
     probe,
     stamps,
     start_node,
@@ -24,6 +23,9 @@ from reliability.relkit import (
     statuses,
     wait_output,
 )
+from tools.rig import NODE_SCRIPT
+
+pytestmark = pytest.mark.live  # every test starts the node
 
 BROKEN = ROOT / "tests" / "mapping" / "broken"
 
@@ -75,9 +77,9 @@ def config_dir(tmp_path: Path) -> Path:
 
 
 def test_bad_scenes_on_load_scene_are_refused_and_the_current_scene_keeps_running(
-    launcher: Launcher, ros_master: RosMaster, config_dir: Path
+    launcher: Rig, ros_master: RosMaster, config_dir: Path
 ):
-    ports = Ports.free()
+    ports = SimPorts.free()
     start_server(launcher, ports)
     node = start_node(launcher, ports, "--scene", SCENE, node_name="picky", sim_config=config_dir)
     watcher = probe(launcher, "pose", "watch", f"{ROBOT}/actual_pose")
@@ -101,3 +103,36 @@ def test_bad_scenes_on_load_scene_are_refused_and_the_current_scene_keeps_runnin
     wait_until(lambda: len(stamps(watcher)) > count + 20, 10, what="actual_pose after the refusals")
     assert statuses(status)[-1]["scene"] == SCENE and statuses(status)[-1]["state"] == "connected"
     assert node.alive() and "Traceback" not in node.output()
+
+
+def test_a_flood_of_huge_load_scene_names_is_refused_in_a_few_short_log_lines(
+    launcher: Rig, ros_master: RosMaster
+):
+    ports = SimPorts.free()
+    start_server(launcher, ports)
+    node = start_node(launcher, ports, "--scene", SCENE, node_name="terse")
+    watcher = probe(launcher, "pose", "watch", f"{ROBOT}/actual_pose")
+    status = probe(launcher, "status", "status", "terse")
+    wait_until(lambda: len(stamps(watcher)) > 5, 30, what="actual_pose")
+    before = len(node.output())
+    rss_before = _rss_mb(node.popen.pid)
+    count, size = 40, 1_000_000
+    sender = probe(launcher, "huge", "huge", "/ProjectAirSim/node/terse/load_scene", str(count), str(size))
+    wait_output(sender, "SENT", 60)
+    wait_until(
+        lambda: statuses(status)[-1]["bridge_errors"].get("load_scene[terse]", 0) == count,
+        20,
+        what="every huge name counted as refused",
+    )
+    logged = node.output()[before:]
+    assert len(logged) < 20_000, len(logged)  # was two copies of every name: 80 MB
+    assert "characters long; at most 4096" in logged
+    assert _rss_mb(node.popen.pid) - rss_before < 100
+    assert statuses(status)[-1]["scene"] == SCENE and node.alive()
+
+
+def _rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return 0.0

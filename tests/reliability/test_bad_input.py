@@ -8,12 +8,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from harness import ROOT, Launcher, Process, RosMaster, wait_until
+from harness import ROOT, Child, Rig, RosMaster, wait_until
 
 from reliability.relkit import (
     ROBOT,
     SCENE,
-    Ports,
+    SimPorts,
     SimView,
     probe,
     start_node,
@@ -28,26 +28,26 @@ MAX_SPEED = 1.0
 def limited_mapping(tmp_path: Path, on_violation: str = "clamp") -> Path:
     """The default mapping with a speed limit on cmd_vel."""
     text = (ROOT / "mappings" / "default.yaml").read_text()
-    marker = "    watchdog_s: 3.0\n"
-    assert text.count(marker) == 1
+    shipped = next(line for line in text.splitlines(keepends=True) if "limits: {max_linear_speed" in line)
+    assert text.count(shipped) == 1
     limits = f"    limits: {{max_linear_speed: {MAX_SPEED}, on_violation: {on_violation}}}\n"
     path = tmp_path / "limited.yaml"
-    path.write_text(text.replace(marker, marker + limits))
+    path.write_text(text.replace(shipped, limits))
     return path
 
 
 @dataclass
-class Rig:
-    launcher: Launcher
-    ports: Ports
-    node: Process
-    status: Process
+class Guarded:
+    launcher: Rig
+    ports: SimPorts
+    node: Child
+    status: Child
 
 
 @pytest.fixture(scope="module")
-def rig(module_launcher: Launcher, module_master: RosMaster, tmp_path_factory) -> Rig:
+def rig(module_launcher: Rig, module_master: RosMaster, tmp_path_factory) -> Guarded:
     """One server and one node (cmd_vel limited to 1 m/s, clamped) for the module; the robot is armed."""
-    ports = Ports.free()
+    ports = SimPorts.free()
     start_server(module_launcher, ports)
     mapping = limited_mapping(tmp_path_factory.mktemp("mapping"))
     node = start_node(module_launcher, ports, "--scene", SCENE, "--mapping", str(mapping), node_name="guard")
@@ -57,10 +57,10 @@ def rig(module_launcher: Launcher, module_master: RosMaster, tmp_path_factory) -
     view = SimView(ports)
     view.ready()
     view.close()
-    return Rig(module_launcher, ports, node, status)
+    return Guarded(module_launcher, ports, node, status)
 
 
-def test_malformed_commands_are_rejected_with_one_warning_per_bridge_and_the_robot_stays_put(rig: Rig):
+def test_malformed_commands_are_rejected_with_one_warning_per_bridge_and_the_robot_stays_put(rig: Guarded):
     launcher, ports, node, status = rig.launcher, rig.ports, rig.node, rig.status
     view = SimView(ports)
     start = view.position()
@@ -90,7 +90,7 @@ def test_malformed_commands_are_rejected_with_one_warning_per_bridge_and_the_rob
     view.close()
 
 
-def test_a_velocity_beyond_the_mapping_limit_is_clamped_to_it(rig: Rig):
+def test_a_velocity_beyond_the_mapping_limit_is_clamped_to_it(rig: Guarded):
     launcher, ports = rig.launcher, rig.ports
     view = SimView(ports)
     driver = probe(launcher, "drive", "twist", f"{ROBOT}/cmd_vel", "25", "5.0")

@@ -6,10 +6,10 @@ import time
 
 import msgpack
 import pytest
-from harness import Launcher, RosMaster, wait_until
+from harness import Rig, RosMaster, wait_until
 
 from reliability.fakesim import FakeSim, message_frame
-from reliability.relkit import ROBOT, SCENE, Ports, probe, stamps, start_node, statuses
+from reliability.relkit import ROBOT, SCENE, SimPorts, probe, stamps, start_node, statuses
 
 SIM = "/Sim/SceneDroneSensors/robots/Drone1"
 POSE = f"{SIM}/actual_pose"
@@ -55,8 +55,8 @@ def radar_frames() -> list[bytes]:
 
 
 @pytest.fixture
-def fake(launcher: Launcher) -> tuple[FakeSim, Ports]:
-    ports = Ports.free()
+def fake(launcher: Rig) -> tuple[FakeSim, SimPorts]:
+    ports = SimPorts.free()
     sim = FakeSim(
         "127.0.0.1",
         ports.topics,
@@ -69,7 +69,7 @@ def fake(launcher: Launcher) -> tuple[FakeSim, Ports]:
 
 
 def test_malformed_simulator_frames_are_dropped_counted_and_reported_while_the_streams_go_on(
-    launcher: Launcher, ros_master: RosMaster, fake: tuple[FakeSim, Ports]
+    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSim, SimPorts]
 ):
     _sim, ports = fake
     node = start_node(launcher, ports, "--scene", SCENE, node_name="sturdy")

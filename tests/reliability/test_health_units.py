@@ -10,7 +10,16 @@ from harness import free_port
 
 from airsim_mapper.cli.node import connect
 from airsim_mapper.convert import registry
-from airsim_mapper.engine.health import Backoff, HealthCheck, SimUnreachable, open_client
+from airsim_mapper.engine.health import (
+    LOST,
+    OK,
+    UNRESPONSIVE,
+    Backoff,
+    HealthCheck,
+    SimUnreachable,
+    Verdict,
+    open_client,
+)
 from airsim_mapper.engine.reregister import ReregisterError, _check
 from airsim_mapper.engine.sim_link import SimLink, SimLinkDead
 from airsim_mapper.engine.status import status_topic
@@ -40,15 +49,15 @@ class FakeLink:
 
 
 def test_a_dropped_connection_is_lost_at_once():
-    assert HealthCheck().check(FakeLink(up=False)) == "the simulator closed the connection"
+    assert HealthCheck().check(FakeLink(up=False)) == Verdict(LOST, "the simulator closed the connection")
 
 
-def test_three_unanswered_probes_in_a_row_mean_lost_and_an_answer_resets_the_count():
+def test_unanswered_probes_on_an_open_connection_mean_unresponsive_never_lost_until_an_answer():
     check = HealthCheck()
-    link = FakeLink(answers=[False, False, True, False, False, False])
-    verdicts = [check.check(link) for _ in range(6)]
-    assert verdicts[:5] == [None] * 5
-    assert verdicts[5] == "no answer to 3 probes of 1 s"
+    link = FakeLink(answers=[False, False, True, False, False, False, False, True])
+    verdicts = [check.check(link) for _ in range(8)]
+    assert [v.kind for v in verdicts] == [OK] * 5 + [UNRESPONSIVE] * 2 + [OK]
+    assert verdicts[5].reason == "no answer to 3 probes of 1 s; the connection is open"
 
 
 def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable():
@@ -111,3 +120,22 @@ def test_the_status_topic_lives_under_the_node_name():
 def test_a_mapping_can_only_name_converters_from_the_catalogue():
     with pytest.raises(LookupError, match=r"os\.system"):
         registry.get("os.system")
+
+
+def test_a_log_budget_logs_so_many_per_period_then_says_how_many_it_held_back(caplog, monkeypatch):
+    import logging
+
+    from airsim_mapper.engine import engine
+
+    now = [100.0]
+    monkeypatch.setattr(engine.time, "monotonic", lambda: now[0])
+    budget = engine.LogBudget(logging.getLogger("budget.test"), 2, 10.0)
+    for index in range(5):
+        budget.warn(f"refused {index}")
+    now[0] += 10.0
+    budget.warn("refused 5")
+    assert [r.getMessage() for r in caplog.records] == [
+        "refused 0",
+        "refused 1",
+        "refused 5 (3 more not logged before this one)",
+    ]

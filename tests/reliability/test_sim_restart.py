@@ -7,7 +7,7 @@ import statistics
 import time
 from pathlib import Path
 
-from harness import Launcher, RosMaster, wait_until
+from harness import Rig, RosMaster, wait_until
 
 from reliability.relkit import (
     PROJECT_SIM_CONFIG as SIM_CONFIG,
@@ -15,7 +15,7 @@ from reliability.relkit import (
 from reliability.relkit import (
     ROBOT,
     SCENE,
-    Ports,
+    SimPorts,
     SimView,
     probe,
     stamps,
@@ -34,9 +34,9 @@ def first_after(times: list[float], t0: float) -> float | None:
 
 
 def test_node_waits_for_a_simulator_that_is_not_running_yet_and_bridges_once_it_appears(
-    launcher: Launcher, ros_master: RosMaster
+    launcher: Rig, ros_master: RosMaster
 ):
-    ports = Ports.free()
+    ports = SimPorts.free()
     node = start_node(launcher, ports, "--scene", SCENE, node_name="early")
     wait_output(node, "waiting for it: attempt 3", 20)
     assert "Traceback" not in node.output()
@@ -54,9 +54,9 @@ def test_node_waits_for_a_simulator_that_is_not_running_yet_and_bridges_once_it_
 
 
 def test_ten_simulator_restarts_each_recover_within_five_seconds_and_leak_no_threads_or_sockets(
-    launcher: Launcher, ros_master: RosMaster
+    launcher: Rig, ros_master: RosMaster
 ):
-    ports = Ports.free()
+    ports = SimPorts.free()
     server = start_server(launcher, ports)
     node = start_node(launcher, ports, "--scene", SCENE, node_name="phoenix")
     watcher = probe(launcher, "pose", "watch", f"{ROBOT}/actual_pose")
@@ -110,9 +110,9 @@ def test_ten_simulator_restarts_each_recover_within_five_seconds_and_leak_no_thr
 
 
 def test_a_client_owned_by_the_mission_script_is_reported_stale_and_never_replaced_behind_its_back(
-    launcher: Launcher, ros_master: RosMaster
+    launcher: Rig, ros_master: RosMaster
 ):
-    ports = Ports.free()
+    ports = SimPorts.free()
     server = start_server(launcher, ports)
     script = Path(__file__).resolve().parent / "user_client_node.py"
     owner = launcher.python(

@@ -7,13 +7,13 @@ import statistics
 import time
 from pathlib import Path
 
-from harness import ROOT, Launcher, RosMaster, wait_until
+from harness import ROOT, Rig, RosMaster, wait_until
 
 from reliability.relkit import (
     ROBOT,
     SCENE,
     SIM_ROBOT,
-    Ports,
+    SimPorts,
     SimView,
     probe,
     start_node,
@@ -41,7 +41,7 @@ def short_watchdog_mapping(tmp_path: Path) -> Path:
     return path
 
 
-def run_trials(launcher: Launcher, ports: Ports, node_name: str, count: int, *node_args: str) -> list[float]:
+def run_trials(launcher: Rig, ports: SimPorts, node_name: str, count: int, *node_args: str) -> list[float]:
     node = start_node(launcher, ports, "--scene", SCENE, *node_args, node_name=node_name)
     status = probe(launcher, f"status_{node_name}", "status", node_name)
     wait_until(lambda: statuses(status) and statuses(status)[-1]["scene"] == SCENE, 30, what="the scene")
@@ -64,9 +64,9 @@ def _collect(trials, node, count: int) -> list[float]:
 
 
 def test_the_watchdog_stops_the_robot_just_after_its_timeout_in_20_trials(
-    launcher: Launcher, ros_master: RosMaster, tmp_path: Path
+    launcher: Rig, ros_master: RosMaster, tmp_path: Path
 ):
-    ports = Ports.free()
+    ports = SimPorts.free()
     start_server(launcher, ports)
     mapping = short_watchdog_mapping(tmp_path)
     short = run_trials(launcher, ports, "wd_short", SHORT_TRIALS, "--mapping", str(mapping))
@@ -83,10 +83,8 @@ def test_the_watchdog_stops_the_robot_just_after_its_timeout_in_20_trials(
     assert statistics.median(errors) < 0.12
 
 
-def test_the_robot_stops_when_the_node_is_interrupted_while_driving_it(
-    launcher: Launcher, ros_master: RosMaster
-):
-    ports = Ports.free()
+def test_the_robot_stops_when_the_node_is_interrupted_while_driving_it(launcher: Rig, ros_master: RosMaster):
+    ports = SimPorts.free()
     start_server(launcher, ports)
     node = start_node(launcher, ports, "--scene", SCENE, node_name="interrupted")
     status = probe(launcher, "status", "status", "interrupted")

@@ -8,9 +8,10 @@ import json
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-from harness import SIM_CONFIG, HarnessError
+from harness import SIM_CONFIG, RigError
 
 
 class Inbox:
@@ -38,7 +39,7 @@ class Inbox:
                     return matching
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
-                    raise HarnessError(f"got {len(matching)} of {count} messages within {timeout} s")
+                    raise RigError(f"got {len(matching)} of {count} messages within {timeout} s")
                 self._cond.wait(remaining)
 
 
@@ -49,25 +50,25 @@ def subscribe(client: Any, topic: str) -> Inbox:
 
 
 @functools.cache
-def _merged_config(scene_file: str) -> str:
+def _merged_config(scene_file: str, sim_config: Path) -> str:
     from projectairsim.utils import load_scene_config_as_dict
 
-    config, _ = load_scene_config_as_dict(scene_file, sim_config_path=str(SIM_CONFIG))
+    config, _ = load_scene_config_as_dict(scene_file, sim_config_path=str(sim_config))
     return json.dumps(config)
 
 
-def scene_config(scene_file: str) -> dict[str, Any]:
-    """The merged scene dict the client builds from a shared scene file (parsed once per test run:
-    the client's jsonc parser takes seconds per file)."""
-    return json.loads(_merged_config(scene_file))
+def scene_config(scene_file: str, sim_config: Path = SIM_CONFIG) -> dict[str, Any]:
+    """The merged scene dict the client builds from a scene file in `sim_config` (the project's own configs
+    unless told otherwise; parsed once per test run: the client's jsonc parser takes seconds per file)."""
+    return json.loads(_merged_config(scene_file, sim_config))
 
 
-def load_world(client: Any, scene_file: str) -> Any:
-    """A World on a freshly (re)loaded shared scene, through the client's own `World.load_scene`."""
+def load_world(client: Any, scene_file: str, sim_config: Path = SIM_CONFIG) -> Any:
+    """A World on a freshly (re)loaded scene, through the client's own `World.load_scene`."""
     from projectairsim import World
 
     world = World(client)
-    world.load_scene(scene_config(scene_file))
+    world.load_scene(scene_config(scene_file, sim_config))
     return world
 
 

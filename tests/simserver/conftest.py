@@ -6,22 +6,21 @@ import os
 from collections.abc import Iterator
 
 import pytest
-from harness import Launcher
-from simharness import SimServer, start_simserver
+from harness import Rig, SimServer
 
 
 @pytest.fixture
-def simserver(launcher: Launcher) -> SimServer:
+def simserver(launcher: Rig) -> SimServer:
     """A fresh headless server on free ports, stopped at teardown."""
-    return start_simserver(launcher)
+    return launcher.simserver()
 
 
 @pytest.fixture(scope="module")
 def shared_simserver(tmp_path_factory: pytest.TempPathFactory) -> Iterator[SimServer]:
     """One server for a whole test module (each test loads its own scene)."""
-    launcher = Launcher(tmp_path_factory.mktemp("simserver"), dict(os.environ))
+    launcher = Rig(tmp_path_factory.mktemp("simserver"), dict(os.environ))
     try:
-        yield start_simserver(launcher)
+        yield launcher.simserver()
     finally:
         launcher.stop_all()
         print(launcher.dump_logs())

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
-import commentjson
 import numpy as np
 import pytest
-from harness import SIM_CONFIG
+from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rotate
 from airsim_mapper.simserver.camera import (
@@ -20,6 +19,11 @@ from airsim_mapper.simserver.camera import (
 from airsim_mapper.simserver.world import World, load_world
 
 LEVEL_NORTH = quat_from_rpy(0.0, 0.0, 0.0)
+# the robot configs with a DownCamera capturing all seven image types
+SENSOR_ROBOT = {
+    PROJECT: "robot_quadrotor_sensors.jsonc",
+    EXAMPLES: "robot_quadrotor_fastphysics_sensors.jsonc",
+}
 
 
 @pytest.fixture(scope="module")
@@ -27,10 +31,10 @@ def world() -> World:
     return load_world()
 
 
-@pytest.fixture(scope="module")
-def down_camera() -> dict:
-    robot = commentjson.loads((SIM_CONFIG / "robot_quadrotor_fastphysics_sensors.jsonc").read_text())
-    return next(s for s in robot["sensors"] if s["id"] == "DownCamera")
+@pytest.fixture(scope="module", params=both_configs())
+def down_camera(request: pytest.FixtureRequest) -> dict:
+    """The DownCamera of the project's sensor quadrotor, and of the example one where present."""
+    return next(s for s in robot_sensors(request.param, SENSOR_ROBOT) if s["id"] == "DownCamera")
 
 
 def as_array(image):
@@ -41,10 +45,11 @@ def as_array(image):
 
 def test_camera_info_matches_the_real_server_for_the_down_camera_config(down_camera):
     setting = down_camera["capture-settings"][1]
-    info = camera_info_message(setting["width"], setting["height"], setting["fov-degrees"])
-    f = (400 / 2) / math.tan(math.radians(90) / 2)
-    assert info["intrinsic_camera_matrix"] == pytest.approx([f, 0, 200.0, 0, f, 112.5, 0, 0, 1])
-    assert info["width"] == 400 and info["height"] == 225
+    width, height = setting["width"], setting["height"]
+    info = camera_info_message(width, height, setting["fov-degrees"])
+    f = (width / 2) / math.tan(math.radians(setting["fov-degrees"]) / 2)
+    assert info["intrinsic_camera_matrix"] == pytest.approx([f, 0, width / 2, 0, f, height / 2, 0, 0, 1])
+    assert info["width"] == width and info["height"] == height
     assert info["distortion_model"] == "" and info["distortion_params"] == [0.0] * 5
     assert info["rectification_matrix"] == [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0]
     assert info["projection_matrix"] == [1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0, 0]
@@ -76,8 +81,8 @@ def test_every_configured_image_type_has_the_configured_size_and_encoding(world,
     for kind, image in images.items():
         depth = kind in (1, 2)
         assert image.encoding == ("16FC1" if depth else "BGR")
-        assert (image.width, image.height) == (400, 225)
-        assert len(image.data) == 400 * 225 * (2 if depth else 3)
+        assert (image.width, image.height) == (width, height)
+        assert len(image.data) == width * height * (2 if depth else 3)
 
 
 def test_depth_equals_the_distance_to_a_box_face_and_perspective_grows_towards_the_edges(world):

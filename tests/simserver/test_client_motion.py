@@ -175,3 +175,33 @@ def test_flying_into_an_object_is_stopped_and_reported_on_collision_info(client,
     assert report["normal"]["x"] == pytest.approx(-1.0)
     assert report["penetration_depth"] > 0
     assert 27.5 < position(drone)[0] < 28.0
+
+
+@pytest.mark.parametrize(
+    ("method", "params", "named"),
+    [
+        ("MoveByVelocity", {"vx": 1e308, "vy": 0.0, "vz": 0.0, "duration": 3.0}, "vx, vy, vz"),
+        ("MoveByVelocityBodyFrame", {"vx": 0.0, "vy": 0.0, "vz": float("inf"), "duration": 3.0}, "vz"),
+        ("MoveByVelocity", {"vx": 1e4, "vy": 0.0, "vz": 0.0, "duration": 1e305}, "duration"),
+        ("MoveToPosition", {"x": 1e308, "y": 0.0, "z": -3.0, "velocity": 5.0}, "x"),
+        ("MoveToPosition", {"x": 1.0, "y": 0.0, "z": -3.0, "velocity": 1e308}, "velocity"),
+        ("RotateByYawRate", {"yaw_rate": 1e308, "duration": 1.0}, "yaw_rate"),
+    ],
+)
+def test_a_motion_command_that_would_make_the_state_non_finite_gets_a_parameter_error(
+    drone, client, method, params, named
+):
+    teleport(drone, 0.0, 0.0, -4.0)
+    defaults = {"drivetrain": 0, "yaw_is_rate": True, "yaw": 0.0, "timeout_sec": 10.0, "lookahead": -1.0}
+    defaults |= {"adaptive_lookahead": 1.0}
+    request = {"method": f"/Sim/SceneBasicDrone/robots/Drone1/{method}", "params": defaults | params}
+    with pytest.raises(RuntimeError, match=f"Parameter '{named}'"):
+        client.request({**request, "version": 1.0})
+    assert position(drone) == pytest.approx([0.0, 0.0, -4.0])
+    kinematics = drone.get_ground_truth_kinematics()
+    assert all(math.isfinite(v) for v in kinematics["accels"]["linear"].values())
+
+
+def test_a_teleport_beyond_the_world_is_refused(drone):
+    with pytest.raises(RuntimeError, match="Parameter 'pose'"):
+        teleport(drone, 1e308, 0.0, -4.0)

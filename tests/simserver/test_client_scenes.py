@@ -1,26 +1,29 @@
-"""The real 1.1.0 client loads every shared scene and sees the documented topics, services and clock."""
+"""The real 1.1.0 client loads every scene (the project's, and Project AirSim's examples where present) and
+sees the documented topics, services and clock."""
 
 from __future__ import annotations
 
 import time
 
 import pytest
-from harness import SIM_CONFIG
 from projectairsim import Drone, World
+from simconfigs import both_configs, scenes_of
 
 from simserver.clientkit import load_world, scene_config
-from simserver.expected_topics import EXPECTED, ROBOTS
+from simserver.expected_topics import EXAMPLE_EXPECTED, EXPECTED, PROJECT_EXPECTED, ROBOTS
 
 
-@pytest.mark.parametrize("scene_file", sorted(EXPECTED))
-def test_world_and_drone_load_each_shared_scene_with_the_documented_topic_catalogue(client, scene_file):
-    scene_id, expected = EXPECTED[scene_file]
-    world = load_world(client, scene_file)
+@pytest.mark.parametrize(
+    ("sim_config", "scene_file"), scenes_of(PROJECT_EXPECTED, EXAMPLE_EXPECTED), indirect=["sim_config"]
+)
+def test_world_and_drone_load_each_scene_with_the_documented_topic_catalogue(client, sim_config, scene_file):
+    scene_id, expected = EXPECTED[sim_config][scene_file]
+    world = load_world(client, scene_file, sim_config)
     assert world.parent_topic == f"/Sim/{scene_id}"
     assert set(client.topics) == expected | {"/$topics"}
     assert client.topics["/$topics"].message_type == "topic-list"
-    assert world.list_actors() == ROBOTS[scene_file]
-    for name in ROBOTS[scene_file]:
+    assert world.list_actors() == ROBOTS[sim_config][scene_file]
+    for name in ROBOTS[sim_config][scene_file]:
         drone = Drone(client, world, name)
         actor = next(a for a in world.sim_config["actors"] if a["name"] == name)
         enabled = {s["id"] for s in actor["robot-config"].get("sensors", []) if s["enabled"]}
@@ -32,10 +35,11 @@ def test_world_and_drone_load_each_shared_scene_with_the_documented_topic_catalo
         assert drone.robot_info["actual_pose"] in client.topics
 
 
-def test_the_client_world_constructor_loads_a_scene_file_from_the_shared_configs(client):
-    world = World(client, "scene_basic_drone.jsonc", sim_config_path=str(SIM_CONFIG))
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_the_client_world_constructor_loads_the_basic_drone_scene_file(client, sim_config):
+    world = World(client, "scene_basic_drone.jsonc", sim_config_path=str(sim_config))
     assert world.parent_topic == "/Sim/SceneBasicDrone"
-    assert set(client.topics) == EXPECTED["scene_basic_drone.jsonc"][1] | {"/$topics"}
+    assert set(client.topics) == EXPECTED[sim_config]["scene_basic_drone.jsonc"][1] | {"/$topics"}
     assert Drone(client, world, "Drone1").get_ground_truth_pose()["translation"]["z"] == -4.0
 
 

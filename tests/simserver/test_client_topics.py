@@ -4,26 +4,55 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pytest
 from projectairsim import Drone
 from projectairsim.types import Pose
 from projectairsim.utils import unpack_image
+from simconfigs import EXAMPLES, PROJECT, both_configs, config_dir
 
 from airsim_mapper.geometry import quat_from_rpy
 from simserver.clientkit import load_world, subscribe
 
 CAMERA = "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera"
-DOWN_ORIGIN = np.array([1.1, 2.2, -3.3])
-DOWN_RPY_DEG = (5.73, -85.94, 11.46)
-DOWN_WORLD = DOWN_ORIGIN + np.array([0.0, 0.0, -4.0])  # the drone starts at (0, 0, -4), level
+START = np.array([0.0, 0.0, -4.0])  # scene_drone_sensors.jsonc: Drone1 starts there, level
 
 
-@pytest.fixture
-def sensors_drone(client):
-    world = load_world(client, "scene_drone_sensors.jsonc")
-    return world, Drone(client, world, "Drone1")
+@dataclass(frozen=True)
+class Mounts:
+    """What the robot config of scene_drone_sensors.jsonc says about the sensors these tests look at."""
+
+    down_origin: tuple[float, float, float]  # DownCamera's mount (FRD, m) ...
+    down_rpy_deg: tuple[float, float, float]  # ... and attitude
+    down_size: tuple[int, int]  # DownCamera's width and height, with a 90 degree view
+    lidar_z: float  # lidar1's mount below the frame's origin (FRD z, m)
+
+    @property
+    def down_world(self) -> np.ndarray:
+        return START + np.array(self.down_origin)
+
+
+MOUNTS = {
+    PROJECT: Mounts((0.2, 0.0, 0.1), (0.0, -45.0, 0.0), (320, 240), -0.2),  # robot_quadrotor_sensors
+    EXAMPLES: Mounts((1.1, 2.2, -3.3), (5.73, -85.94, 11.46), (400, 225), 0.2),  # ..._fastphysics_sensors
+}
+
+
+@dataclass(frozen=True)
+class SensorsDrone:
+    world: Any
+    drone: Any
+    mounts: Mounts
+
+
+@pytest.fixture(params=both_configs())
+def sensors_drone(request: pytest.FixtureRequest, client) -> SensorsDrone:
+    """Drone1 of scene_drone_sensors.jsonc: the project's, and the example's where present."""
+    world = load_world(client, "scene_drone_sensors.jsonc", config_dir(request.param))
+    return SensorsDrone(world, Drone(client, world, "Drone1"), MOUNTS[request.param])
 
 
 def camera_pose(message: dict) -> tuple[list[float], list[float]]:
@@ -36,7 +65,7 @@ def same_rotation(a, b) -> bool:
 
 
 def test_actual_pose_is_cached_at_scene_start_and_published_at_a_steady_rate(client, sensors_drone):
-    world, drone = sensors_drone
+    world, drone = sensors_drone.world, sensors_drone.drone
     poses = subscribe(client, drone.robot_info["actual_pose"])
     first = poses.wait_for(1, timeout=1.0)[0]
     assert first["position"] == {"x": 0.0, "y": 0.0, "z": -4.0}
@@ -49,21 +78,23 @@ def test_actual_pose_is_cached_at_scene_start_and_published_at_a_steady_rate(cli
 
 def test_camera_info_is_cached_at_scene_start_with_the_real_intrinsics(client, sensors_drone):
     info = subscribe(client, f"{CAMERA}/scene_camera_info").wait_for(1, timeout=2.0)[0]
-    f = 200.0  # (400 / 2) / tan(90 deg / 2)
-    assert info["width"] == 400 and info["height"] == 225
-    assert info["intrinsic_camera_matrix"] == pytest.approx([f, 0, 200.0, 0, f, 112.5, 0, 0, 1])
+    width, height = sensors_drone.mounts.down_size
+    f = width / 2  # (width / 2) / tan(90 deg / 2)
+    assert info["width"] == width and info["height"] == height
+    assert info["intrinsic_camera_matrix"] == pytest.approx([f, 0, width / 2, 0, f, height / 2, 0, 0, 1])
     assert info["projection_matrix"] == [1.0, 0, 0, 0, 0, 1.0, 0, 0, 0, 0, 1.0, 0]
     assert "time_stamp" not in info
 
 
 def test_subscribed_images_carry_the_camera_world_pose_and_the_sim_time(client, sensors_drone):
-    world, _ = sensors_drone
+    world, mounts = sensors_drone.world, sensors_drone.mounts
+    width, height = mounts.down_size
     images = subscribe(client, f"{CAMERA}/scene_camera").wait_for(2, timeout=5.0)
     message = images[-1]
-    assert message["encoding"] == "BGR" and unpack_image(message).shape == (225, 400, 3)
+    assert message["encoding"] == "BGR" and unpack_image(message).shape == (height, width, 3)
     position, rotation = camera_pose(message)
-    assert position == pytest.approx(DOWN_WORLD, abs=1e-5)
-    expected = quat_from_rpy(*(math.radians(v) for v in DOWN_RPY_DEG))
+    assert position == pytest.approx(mounts.down_world, abs=1e-5)
+    expected = quat_from_rpy(*(math.radians(v) for v in mounts.down_rpy_deg))
     assert same_rotation(rotation, expected)
     assert 0 < images[0]["time_stamp"] < images[1]["time_stamp"] <= world.get_sim_time()
     assert message["data_float"] == [] and message["annotations"] == []
@@ -77,17 +108,18 @@ def test_disparity_camera_info_arrives_on_the_image_topic_as_on_the_real_server(
 
 
 def test_get_images_returns_the_list_form_that_the_client_decodes(sensors_drone):
-    world, drone = sensors_drone
+    world, drone = sensors_drone.world, sensors_drone.drone
+    width, height = sensors_drone.mounts.down_size
     before = world.get_sim_time()
     images = drone.get_images("DownCamera", [0, 1, 2, 3, 6])
     assert sorted(images) == [0, 1, 2, 3, 6]
     assert isinstance(images[0]["data"], list)
-    assert unpack_image(images[0]).shape == (225, 400, 3)
+    assert unpack_image(images[0]).shape == (height, width, 3)
     depth = unpack_image(images[1])
-    assert depth.dtype == np.float16 and depth.shape == (225, 400)
+    assert depth.dtype == np.float16 and depth.shape == (height, width)
     assert images[1]["encoding"] == "16FC1"
     assert np.isfinite(depth).any()
-    assert unpack_image(images[3]).shape == (225, 400, 3)
+    assert unpack_image(images[3]).shape == (height, width, 3)
     assert all(img["time_stamp"] >= before for img in images.values())
 
 
@@ -99,7 +131,7 @@ def test_get_images_skips_image_types_the_camera_does_not_capture(client):
 
 
 def test_camera_set_pose_moves_the_camera_relative_to_the_robot(sensors_drone):
-    _, drone = sensors_drone
+    drone = sensors_drone.drone
     pose = Pose(
         {
             "translation": {"x": 0.5, "y": 0.0, "z": -1.0},
@@ -112,7 +144,7 @@ def test_camera_set_pose_moves_the_camera_relative_to_the_robot(sensors_drone):
     assert camera_pose(moved) == (pytest.approx([0.5, 0.0, -5.0]), pytest.approx([1.0, 0.0, 0.0, 0.0]))
     assert client_request_reset(drone) is True
     back = drone.get_images("DownCamera", [0])[0]
-    assert camera_pose(back)[0] == pytest.approx(DOWN_WORLD, abs=1e-5)
+    assert camera_pose(back)[0] == pytest.approx(sensors_drone.mounts.down_world, abs=1e-5)
 
 
 def client_request_reset(drone) -> bool:
@@ -122,7 +154,7 @@ def client_request_reset(drone) -> bool:
 
 
 def test_unsubscribe_stops_delivery(client, sensors_drone):
-    _, drone = sensors_drone
+    drone = sensors_drone.drone
     topic = drone.robot_info["actual_pose"]
     poses = subscribe(client, topic)
     poses.wait_for(5, timeout=2.0)
@@ -139,12 +171,13 @@ def test_lidar_scans_arrive_with_the_lidar_world_pose(client, sensors_drone):
     )[0]
     assert len(scan["point_cloud"]) == 3 * len(scan["laser_index_cloud"]) > 0
     assert len(scan["segmentation_cloud"]) == len(scan["intensity_cloud"]) == len(scan["laser_index_cloud"])
-    assert scan["pose"]["position"] == pytest.approx({"x": 0.0, "y": 0.0, "z": -3.8})
+    lidar_z = START[2] + sensors_drone.mounts.lidar_z
+    assert scan["pose"]["position"] == pytest.approx({"x": 0.0, "y": 0.0, "z": lidar_z})
     assert scan["time_stamp"] > 0
 
 
 def test_instrument_topics_and_getters_serve_the_sensor_messages(client, sensors_drone):
-    _, drone = sensors_drone
+    drone = sensors_drone.drone
     imu = drone.get_imu_data("IMU1")
     assert imu["time_stamp"] > 0
     barometer = subscribe(client, drone.sensors["Barometer"]["barometer"]).wait_for(1, timeout=2.0)[0]
@@ -162,4 +195,5 @@ def test_radar_detections_and_tracks_arrive_with_the_radar_pose(client):
     tracks = subscribe(client, tower.sensors["radar1"]["radar_tracks"]).wait_for(1, timeout=5.0)
     assert isinstance(detections[-1]["radar_detections"], list)
     assert isinstance(tracks[-1]["radar_tracks"], list)
-    assert detections[-1]["pose"]["position"] == pytest.approx({"x": 30.0, "y": 5.6, "z": -5.0}, abs=1e-5)
+    # the mast at (20, 8, -3) faces east; its radar is mounted 0.5 m in front of it
+    assert detections[-1]["pose"]["position"] == pytest.approx({"x": 20.0, "y": 8.5, "z": -3.0}, abs=1e-5)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
-import commentjson
 import numpy as np
 import pytest
-from harness import SIM_CONFIG
+from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver.instruments import (
@@ -25,13 +24,29 @@ from airsim_mapper.simserver.instruments import (
 )
 from airsim_mapper.simserver.world import load_world
 
-HOME = (47.641468, -122.140165, 122.0)  # the sample scenes' home-geo-point
+HOME = (47.641468, -122.140165, 122.0)  # the scenes' home-geo-point
+# robot configs carrying every instrument
+INSTRUMENT_ROBOT = {
+    PROJECT: "robot_quadrotor_survey.jsonc",
+    EXAMPLES: "robot_quadrotor_fastphysics_sensors.jsonc",
+}
+# each battery at start: percent remaining, and seconds left at its drain rate (the example's battery
+# gives no drain rate: the server's default is 0.02 per second)
+BATTERY_AT_START = {
+    PROJECT: (100 * 45000 / 50000, int(45000 / 2.5)),
+    EXAMPLES: (100 * 30000 / 36000, int(30000 / 0.02)),
+}
 
 
-@pytest.fixture(scope="module")
-def sensors() -> dict[str, dict]:
-    robot = commentjson.loads((SIM_CONFIG / "robot_quadrotor_fastphysics_sensors.jsonc").read_text())
-    return {s["type"]: s for s in robot["sensors"]}
+@pytest.fixture(scope="module", params=both_configs())
+def real_sensors(request: pytest.FixtureRequest) -> tuple[str, dict[str, dict]]:
+    """The survey quadrotor's instruments by type, and the example sensor quadrotor's where present."""
+    return request.param, {s["type"]: s for s in robot_sensors(request.param, INSTRUMENT_ROBOT)}
+
+
+@pytest.fixture
+def sensors(real_sensors) -> dict[str, dict]:
+    return real_sensors[1]
 
 
 def kin(position=(0.0, 0.0, -4.0), rpy=(0.0, 0.0, 0.0), velocity=(0, 0, 0), rates=(0, 0, 0), accel=(0, 0, 0)):
@@ -114,24 +129,29 @@ def test_magnetometer_rotates_the_earth_field_into_the_body_frame(sensors):
     east = magnetometer_message(kin(rpy=(0, 0, math.pi / 2)), cfg, 0)["magnetic_field_body"]
     north, eastward, down = MAGNETIC_FIELD_NED
     assert east == pytest.approx({"x": eastward, "y": -north, "z": down}, abs=1e-12)
-    assert level["magnetic_field_covariance"] == pytest.approx(np.diag([0.005**2] * 3).ravel().tolist())
+    sigma = np.array(cfg["noise-sigma"].split(), dtype=float)
+    assert level["magnetic_field_covariance"] == pytest.approx(np.diag(sigma**2).ravel().tolist())
 
 
 def test_the_downward_distance_sensor_measures_the_height_above_the_ground(sensors):
     world = load_world()
-    cfg = sensors["distance-sensor"]  # pitched -90 deg, mounted 0.2 m below the body
+    cfg = sensors["distance-sensor"]  # pitched -90 deg, mounted 0.15 m (project) or 0.2 m below the body
+    assert cfg["origin"]["rpy-deg"].split() == ["0", "-90", "0"]
+    below = float(cfg["origin"]["xyz"].split()[2])
     msg = distance_message(world, kin(position=(-40.0, 40.0, -4.0)), cfg, 7)
     assert set(msg) == {"time_stamp", "current_distance", "pose"}
-    assert msg["current_distance"] == pytest.approx(3.8, abs=1e-4)
-    assert msg["pose"]["position"] == pytest.approx({"x": -40.0, "y": 40.0, "z": -3.8})
+    assert msg["current_distance"] == pytest.approx(4.0 - below, abs=1e-4)
+    assert msg["pose"]["position"] == pytest.approx({"x": -40.0, "y": 40.0, "z": -4.0 + below})
     far = distance_message(world, kin(position=(-40.0, 40.0, -80.0)), cfg, 7)
     assert far["current_distance"] == cfg["max-distance"]
     near = distance_message(world, kin(position=(-40.0, 40.0, -0.3)), cfg, 7)
     assert near["current_distance"] == cfg["min-distance"]
 
 
-def test_battery_discharges_linearly_and_changes_state_when_low(sensors):
-    cfg = sensors["battery"]  # 36000 total, 30000 at start
+def test_battery_discharges_linearly_and_changes_state_when_low(real_sensors):
+    source, sensors = real_sensors
+    cfg = sensors["battery"]
+    percent, seconds = BATTERY_AT_START[source]
     start = battery_message(0, cfg, 0.0)
     assert set(start) == {
         "time_stamp",
@@ -139,9 +159,9 @@ def test_battery_discharges_linearly_and_changes_state_when_low(sensors):
         "estimated_time_remaining",
         "battery_charge_state",
     }
-    assert start["battery_pct_remaining"] == pytest.approx(100 * 30000 / 36000)
+    assert start["battery_pct_remaining"] == pytest.approx(percent)
     assert start["battery_charge_state"] == "BATTERY_CHARGE_STATE_OK"
-    assert start["estimated_time_remaining"] == int(30000 / 0.02)
+    assert start["estimated_time_remaining"] == seconds
     simple = {
         "total-battery-capacity": 100,
         "battery-capacity-on-start": 30,

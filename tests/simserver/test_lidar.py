@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
-import commentjson
 import numpy as np
 import pytest
-from harness import SIM_CONFIG
+from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
 from airsim_mapper.simserver.lidar import LidarError, LidarModel
@@ -15,6 +14,16 @@ from airsim_mapper.simserver.world import World, load_world
 
 LEVEL = np.array([1.0, 0.0, 0.0, 0.0])
 TENTH_S = 100_000_000
+# robot configs with a 16-channel lidar sweeping from the horizon straight down (6 degrees apart)
+SURVEY_ROBOT = {
+    PROJECT: "robot_quadrotor_survey.jsonc",
+    EXAMPLES: "robot_quadrotor_fastphysics_sensors.jsonc",
+}
+# what each lidar's config says: channels, range (m), points per second, rotation (Hz), mount (m)
+EXPECTED_MODEL = {
+    PROJECT: (16, 90.0, 80000, 10, [0.0, 0.0, 0.15]),
+    EXAMPLES: (16, 100.0, 100000, 10, [0.0, 0.0, 0.2]),
+}
 
 
 @pytest.fixture(scope="module")
@@ -22,16 +31,21 @@ def world() -> World:
     return load_world()
 
 
-@pytest.fixture(scope="module")
-def real_lidar_config() -> dict:
-    robot = commentjson.loads((SIM_CONFIG / "robot_quadrotor_fastphysics_sensors.jsonc").read_text())
-    return next(s for s in robot["sensors"] if s["type"] == "lidar")
+@pytest.fixture(scope="module", params=both_configs())
+def real_lidar_config(request: pytest.FixtureRequest) -> tuple[str, dict]:
+    """The project's survey lidar, and the example sensor quadrotor's where present."""
+    return request.param, next(s for s in robot_sensors(request.param, SURVEY_ROBOT) if s["type"] == "lidar")
 
 
 @pytest.fixture
 def lidar_config(real_lidar_config) -> dict:
-    """The lidar of the real sensor-rich quadrotor config: 16 channels, 0..-90 deg, 100k pts/s, 10 Hz."""
-    return dict(real_lidar_config)
+    """A copy of a real lidar config: 16 channels from 0 to -90 deg, 10 Hz; the range and the points per
+    second differ (90 m and 80k pts/s for the project's, 100 m and 100k pts/s for the example's)."""
+    return dict(real_lidar_config[1])
+
+
+def columns_per_rotation(config: dict) -> int:
+    return int(config["points-per-second"]) // int(config["horizontal-rotation-frequency"]) // 16
 
 
 def world_points(scan: dict, position, orientation) -> np.ndarray:
@@ -39,13 +53,15 @@ def world_points(scan: dict, position, orientation) -> np.ndarray:
     return local @ quat_to_matrix(orientation).T + position
 
 
-def test_the_model_reads_the_real_config(lidar_config):
-    model = LidarModel.from_config(lidar_config)
-    assert model.channels == 16 and model.range_m == 100.0
-    assert model.points_per_second == 100000 and model.rotation_hz == 10
+def test_the_model_reads_the_real_config(real_lidar_config):
+    source, config = real_lidar_config
+    channels, range_m, points_per_second, rotation_hz, mount = EXPECTED_MODEL[source]
+    model = LidarModel.from_config(config)
+    assert model.channels == channels and model.range_m == range_m
+    assert model.points_per_second == points_per_second and model.rotation_hz == rotation_hz
     assert np.allclose(model.elevations_deg, np.linspace(0.0, -90.0, 16))
-    assert np.allclose(model.mount_position, [0.0, 0.0, 0.2])
-    assert model.column_step_deg == pytest.approx(360 * 10 * 16 / 100000)
+    assert np.allclose(model.mount_position, mount)
+    assert model.column_step_deg == pytest.approx(360 * rotation_hz * channels / points_per_second)
 
 
 def test_one_rotation_fires_points_per_second_over_frequency_rays_in_column_order(world, lidar_config):
@@ -53,11 +69,11 @@ def test_one_rotation_fires_points_per_second_over_frequency_rays_in_column_orde
     position = np.array([-40.0, 40.0, -4.0])  # open ground, nothing around
     scan = model.scan(world, position, LEVEL, 0, TENTH_S)
     lasers = scan["laser_index_cloud"]
-    columns = 100000 // 10 // 16
+    columns = columns_per_rotation(lidar_config)
     counts = np.bincount(lasers, minlength=16)
-    # every channel looking down by more than asin(4 / 100) reaches the ground within range
+    # every channel looking down by more than asin(4 / range) reaches the ground within range (90 m or more)
     assert (counts[1:] == columns).all()
-    assert 0 < counts[0] < columns  # the horizontal channel reaches only the blocks within 100 m
+    assert 0 < counts[0] < columns  # the horizontal channel reaches only the blocks, 46-82 m away
     assert scan["point_cloud"].dtype == np.float32 and scan["point_cloud"].size == 3 * lasers.size
     assert scan["intensity_cloud"].shape == scan["segmentation_cloud"].shape == lasers.shape
     assert scan["segmentation_cloud"].dtype == np.int32 and lasers.dtype == np.int32
@@ -114,12 +130,13 @@ def test_azimuth_is_state_so_two_half_scans_continue_one_another(world, lidar_co
     whole = LidarModel.from_config(config).scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S)
     model = LidarModel.from_config(config)
     first = model.scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, 0, TENTH_S // 2)
-    assert model.azimuth_deg == pytest.approx(312 * model.column_step_deg)  # 312.5 columns are due
+    due = columns_per_rotation(config) / 2  # 250 columns (project) or 312.5 (example) in half a scan
+    assert model.azimuth_deg == pytest.approx(math.floor(due) * model.column_step_deg)
     second = model.scan(world, np.array([-40.0, 40.0, -4.0]), LEVEL, TENTH_S // 2, TENTH_S)
     joined = np.concatenate([first["azimuth_elevation_range_cloud"], second["azimuth_elevation_range_cloud"]])
     assert np.allclose(joined, whole["azimuth_elevation_range_cloud"], atol=1e-5)
     azimuths = np.degrees(first["azimuth_elevation_range_cloud"].reshape(-1, 3)[:, 0]) % 360
-    assert azimuths.max() < 180.0
+    assert azimuths.max() <= 180.0 + 1e-4  # half a turn: the first half of the circle
 
 
 def test_a_fraction_of_a_column_is_carried_to_the_next_scan(world):

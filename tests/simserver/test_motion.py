@@ -155,3 +155,14 @@ def test_a_fast_descent_stops_on_a_raised_surface_even_with_one_long_tick():
     body.run(Velocity([0.0, 0.0, 20.0], 1.0, YawMode()))
     body.tick(0.1)
     assert body.state.position[2] == -0.5
+
+
+def test_a_step_that_would_make_the_state_non_finite_ends_the_command_and_the_body_rests():
+    body = body_at()
+    command = body.run(Velocity([1e308, 0.0, 0.0], 3.0, YawMode(True, 0.0)))
+    run(body, 0.05)
+    state = body.snapshot()
+    assert command.done and command.result is False
+    for values in (state.position, state.linear_velocity, state.linear_acceleration):
+        assert np.all(np.isfinite(values)), values
+    assert state.position.tolist() == [0.0, 0.0, -4.0]

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
-import commentjson
 import numpy as np
 import pytest
-from harness import SIM_CONFIG
+from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver.radar import RadarError, RadarModel
@@ -15,6 +14,13 @@ from airsim_mapper.simserver.world import World, load_world
 
 FACING_EAST = quat_from_rpy(0.0, 0.0, math.pi / 2)
 STILL = np.zeros(3)
+# static radar masts: +-0.785 rad in azimuth, +-0.524 in elevation, 1 m range cells, one mask each
+TOWER_ROBOT = {PROJECT: "robot_radar_tower.jsonc", EXAMPLES: "radar_tower.jsonc"}
+# what each radar's config says: range-max, rcs-adjust-factor, track-interval, mask elevations, mount
+EXPECTED_MODEL = {
+    PROJECT: (300.0, 0.2, 0.25, (-0.6, -0.3), [0.5, 0.0, 0.0]),
+    EXAMPLES: (500.0, 0.1, 0.2, (-0.8, -0.2), [0.6, 0.0, 0.0]),
+}
 
 
 @pytest.fixture(scope="module")
@@ -22,15 +28,20 @@ def world() -> World:
     return load_world()
 
 
-@pytest.fixture(scope="module")
-def tower_radar() -> dict:
-    robot = commentjson.loads((SIM_CONFIG / "radar_tower.jsonc").read_text())
-    return next(s for s in robot["sensors"] if s["type"] == "radar")
+@pytest.fixture(scope="module", params=both_configs())
+def real_tower_radar(request: pytest.FixtureRequest) -> tuple[str, dict]:
+    """The project's radar mast, and the example radar tower where present."""
+    return request.param, next(s for s in robot_sensors(request.param, TOWER_ROBOT) if s["type"] == "radar")
+
+
+@pytest.fixture
+def tower_radar(real_tower_radar) -> dict:
+    return dict(real_tower_radar[1])
 
 
 @pytest.fixture
 def radar(tower_radar) -> RadarModel:
-    """The radar of the real radar tower config (fov +-0.785 x +-0.524 rad, 500 m, one mask)."""
+    """The radar of a real radar tower config."""
     return RadarModel.from_config(tower_radar)
 
 
@@ -41,13 +52,16 @@ def ball_detection(world: World, detections: list[dict], radar: RadarModel) -> d
     return found[0]
 
 
-def test_the_model_reads_the_real_radar_config(radar):
+def test_the_model_reads_the_real_radar_config(real_tower_radar):
+    source, config = real_tower_radar
+    range_max, rcs_adjust, track_interval, mask_elevation, mount = EXPECTED_MODEL[source]
+    radar = RadarModel.from_config(config)
     assert (radar.azimuth_min, radar.azimuth_max) == (-0.785, 0.785)
     assert (radar.elevation_min, radar.elevation_max) == (-0.524, 0.524)
-    assert radar.range_max == 500.0 and radar.range_resolution == 1.0
-    assert radar.rcs_adjust_factor == 0.1 and radar.track_interval == 0.2
-    assert len(radar.masks) == 1 and radar.masks[0].bounds["elevation"] == (-0.8, -0.2)
-    assert np.allclose(radar.mount_position, [0.6, 0.0, 0.0])
+    assert radar.range_max == range_max and radar.range_resolution == 1.0
+    assert radar.rcs_adjust_factor == rcs_adjust and radar.track_interval == track_interval
+    assert len(radar.masks) == 1 and radar.masks[0].bounds["elevation"] == mask_elevation
+    assert np.allclose(radar.mount_position, mount)
 
 
 def test_a_ball_dead_ahead_is_detected_at_its_surface_range_with_zero_angles(world, radar):
@@ -90,7 +104,7 @@ def test_objects_outside_the_field_of_view_or_range_are_not_detected(world, towe
     radar = RadarModel.from_config(tower_radar)
     facing_west = quat_from_rpy(0.0, 0.0, -math.pi / 2)
     behind = radar.detect(world, np.array([20.0, 10.0, -3.0]), facing_west, STILL, 0)
-    assert all(d["rcs_sqm"] != pytest.approx(math.pi * 0.1) for d in behind)
+    assert all(d["rcs_sqm"] != pytest.approx(math.pi * radar.rcs_adjust_factor) for d in behind)
     short = RadarModel.from_config(tower_radar | {"range-max": 5.0})
     assert short.detect(world, np.array([20.0, 10.0, -3.0]), FACING_EAST, STILL, 0) == []
 
@@ -119,7 +133,7 @@ def test_tracks_keep_their_ids_across_calls_and_estimate_the_object_centre(world
     ids_second = {round(t["range_est"], 3): t["id"] for t in second}
     assert ids_first == ids_second
     assert len(set(ids_first.values())) == len(first)
-    ball = next(t for t in second if t["rcs_sqm"] == pytest.approx(math.pi * 0.1))
+    ball = next(t for t in second if t["rcs_sqm"] == pytest.approx(math.pi * radar.rcs_adjust_factor))
     assert ball["position_est"] == pytest.approx({"x": 12.0, "y": 5.0, "z": -2.0})
     assert ball["range_est"] == pytest.approx(math.sqrt(173.0))
     assert ball["azimuth_est"] == pytest.approx(math.atan2(5.0, 12.0))

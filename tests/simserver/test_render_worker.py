@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from harness import wait_until
-from simharness import start_simserver
 
 from airsim_mapper.simserver import camera, render_worker
 from airsim_mapper.simserver.render_worker import (
@@ -22,6 +21,8 @@ from airsim_mapper.simserver.render_worker import (
 )
 from airsim_mapper.simserver.world import load_world
 from simserver.clientkit import load_world as load_scene
+
+pytestmark = pytest.mark.live  # the render worker is a child process
 
 POSITION = np.array([-8.0, 0.0, -12.0])
 ORIENTATION = np.array([0.9914, 0.0, -0.1305, 0.0])
@@ -134,7 +135,7 @@ def children(pid: int) -> list[int]:
 def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(launcher, in_process):
     from projectairsim import Drone
 
-    server = start_simserver(launcher, *(["--render-in-process"] if in_process else []))
+    server = launcher.simserver(*(["--render-in-process"] if in_process else []))
     client = server.client()
     try:
         world = load_scene(client, "scene_basic_drone.jsonc")

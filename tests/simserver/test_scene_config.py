@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
+from harness import SIM_CONFIG
+from simconfigs import EXAMPLE_SCENES, scenes_of
 
 from airsim_mapper.simserver.scene import (
     SceneError,
@@ -16,12 +19,12 @@ from airsim_mapper.simserver.scene import (
     topic_table,
 )
 from simserver.clientkit import scene_config
-from simserver.expected_topics import EXPECTED
+from simserver.expected_topics import EXAMPLE_EXPECTED, EXPECTED, PROJECT_EXPECTED
 
 
-def merged_scene(name: str) -> str:
+def merged_scene(name: str, sim_config: Path = SIM_CONFIG) -> str:
     """The JSON string the real client sends with LoadScene (robot configs inlined by the client itself)."""
-    return json.dumps(scene_config(name))
+    return json.dumps(scene_config(name, sim_config))
 
 
 def minimal(**overrides) -> dict:
@@ -37,10 +40,17 @@ def minimal(**overrides) -> dict:
     return scene
 
 
-@pytest.mark.parametrize("scene_file", sorted(EXPECTED))
-def test_each_shared_scene_registers_exactly_the_documented_topics(scene_file):
-    scene_id, expected = EXPECTED[scene_file]
-    spec = parse_scene(merged_scene(scene_file))
+def test_the_catalogues_cover_every_project_scene_and_the_example_scenes_the_compatibility_tests_use():
+    assert sorted(path.name for path in SIM_CONFIG.glob("scene_*.jsonc")) == sorted(PROJECT_EXPECTED)
+    assert sorted(EXAMPLE_EXPECTED) == sorted(EXAMPLE_SCENES)
+
+
+@pytest.mark.parametrize(
+    ("sim_config", "scene_file"), scenes_of(PROJECT_EXPECTED, EXAMPLE_EXPECTED), indirect=["sim_config"]
+)
+def test_each_scene_registers_exactly_the_documented_topics(sim_config, scene_file):
+    scene_id, expected = EXPECTED[sim_config][scene_file]
+    spec = parse_scene(merged_scene(scene_file, sim_config))
     assert spec.id == scene_id
     paths = [row.path for row in topic_table(spec)]
     assert paths == sorted(paths)

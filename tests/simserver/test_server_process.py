@@ -10,9 +10,9 @@ from pathlib import Path
 import msgpack
 import pynng
 import pytest
-from harness import SIM_CONFIG, wait_until
+from harness import EXAMPLE_CONFIG, SIM_CONFIG, wait_until
 from projectairsim import Drone
-from simharness import start_simserver
+from simconfigs import both_configs
 
 from simserver.clientkit import load_world, scene_config
 
@@ -21,7 +21,7 @@ HELLO = Path(__file__).parent / "scripts" / "hello_drone.py"
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_the_server_exits_0_with_its_threads_stopped_on_sigint_and_sigterm(launcher, sig):
-    server = start_simserver(launcher)
+    server = launcher.simserver()
     client = server.client()
     load_world(client, "scene_basic_drone.jsonc")
     client.disconnect()
@@ -29,16 +29,22 @@ def test_the_server_exits_0_with_its_threads_stopped_on_sigint_and_sigterm(launc
     assert "stopped" in server.process.output()
 
 
-def test_a_hello_drone_script_using_only_the_client_api_flies_and_reads_sensors(launcher):
-    server = start_simserver(launcher)
-    args = [str(HELLO), server.address, str(server.topics_port), str(server.services_port), str(SIM_CONFIG)]
+# scene_drone_sensors.jsonc's DownCamera: 320x240 in the project's robot config, 400x225 in the example's
+DOWN_CAMERA_SHAPE = {SIM_CONFIG: (240, 320), EXAMPLE_CONFIG: (225, 400)}
+
+
+@pytest.mark.parametrize("sim_config", both_configs(), indirect=True)
+def test_a_hello_drone_script_using_only_the_client_api_flies_and_reads_sensors(launcher, sim_config):
+    server = launcher.simserver()
+    args = [str(HELLO), server.address, str(server.topics_port), str(server.services_port), str(sim_config)]
     script = launcher.python("hello_drone", args)
     assert script.wait(timeout=90) == 0, script.output()
     out = script.output()
+    height, width = DOWN_CAMERA_SHAPE[sim_config]
     for line in (
         "takeoff True",
         "move True",
-        "image (225, 400, 3) depth (225, 400)",
+        f"image ({height}, {width}, 3) depth ({height}, {width})",
         "subscribed image True",
         "land True",
         "landed state 0",
@@ -64,7 +70,7 @@ def test_a_world_file_option_replaces_the_built_in_world(launcher, tmp_path):
             }
         )
     )
-    server = start_simserver(launcher, "--world", str(world_file), "--pose-rate", "50")
+    server = launcher.simserver("--world", str(world_file), "--pose-rate", "50")
     client = server.client()
     try:
         world = load_world(client, "scene_basic_drone.jsonc")
@@ -93,7 +99,7 @@ def test_a_bad_world_file_stops_the_server_at_start_with_a_message(launcher, tmp
 
 
 def test_bad_requests_get_error_replies_and_the_server_keeps_serving(launcher):
-    server = start_simserver(launcher)
+    server = launcher.simserver()
     client = server.client()
     try:
         world = load_world(client, "scene_basic_drone.jsonc")
@@ -124,7 +130,7 @@ def test_bad_requests_get_error_replies_and_the_server_keeps_serving(launcher):
 
 
 def test_an_invalid_scene_gets_an_error_and_the_previous_scene_keeps_running(launcher):
-    server = start_simserver(launcher)
+    server = launcher.simserver()
     client = server.client()
     try:
         world = load_world(client, "scene_basic_drone.jsonc")
@@ -150,7 +156,7 @@ def test_an_invalid_scene_gets_an_error_and_the_previous_scene_keeps_running(lau
 
 
 def test_a_client_that_goes_away_loses_its_subscriptions(launcher):
-    server = start_simserver(launcher)
+    server = launcher.simserver()
     first = server.client()
     world = load_world(first, "scene_basic_drone.jsonc")
     first.subscribe(Drone(first, world, "Drone1").robot_info["actual_pose"], lambda *_: None)
@@ -169,3 +175,45 @@ def test_a_client_that_goes_away_loses_its_subscriptions(launcher):
         5.0,
         what="the server to clear the vanished client's subscriptions",
     )
+
+
+def listening_addresses(port: int) -> set[str]:
+    """The local IPv4 addresses with a socket listening on `port` (from /proc/net/tcp)."""
+    found = set()
+    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
+        local, state = line.split()[1], line.split()[3]
+        address, hex_port = local.split(":")
+        if state == "0A" and int(hex_port, 16) == port:
+            found.add(socket.inet_ntoa(bytes.fromhex(address)[::-1]))
+    return found
+
+
+def test_the_server_listens_on_loopback_unless_told_otherwise_and_then_warns(launcher):
+    from harness import free_port
+
+    ports = [free_port(), free_port()]
+    argv = ["-m", "airsim_mapper.simserver", "--topicsport", str(ports[0]), "--servicesport", str(ports[1])]
+    local = launcher.python("simserver_default", argv)
+    wait_until(lambda: "ready" in local.output(), 30, what="the server with the default address")
+    assert listening_addresses(ports[0]) == {"127.0.0.1"} == listening_addresses(ports[1])
+    assert "WARNING" not in local.output()
+    local.stop()
+    ports = [free_port(), free_port()]
+    argv = ["-m", "airsim_mapper.simserver", "--address", "0.0.0.0"]
+    argv += ["--topicsport", str(ports[0]), "--servicesport", str(ports[1])]
+    exposed = launcher.python("simserver_exposed", argv)
+    wait_until(lambda: "ready" in exposed.output(), 30, what="the server on 0.0.0.0")
+    assert listening_addresses(ports[0]) == {"0.0.0.0"}
+    assert "listening on 0.0.0.0" in exposed.output() and "no authentication" in exposed.output()
+
+
+def test_the_launch_files_start_the_server_on_the_bridge_address_loopback_by_default():
+    from xml.etree import ElementTree
+
+    root = Path(__file__).resolve().parents[2] / "launch"
+    for name in ("demo.launch", "rviz.launch"):
+        launch = ElementTree.parse(root / name).getroot()
+        args = {arg.get("name"): arg.get("default") for arg in launch.findall("arg")}
+        sims = [node for node in launch.iter("node") if node.get("type") == "airsim_mapper_sim.py"]
+        assert args["address"] == "127.0.0.1", name
+        assert sims and all("--address $(arg address)" in node.get("args") for node in sims), name

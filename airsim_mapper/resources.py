@@ -1,0 +1,37 @@
+"""The package's own data: the shipped mappings and the mapping schema, found the same way in a checkout,
+an editable install and a wheel.
+
+A checkout has `mappings/` and `schemas/` at its top (links into the package), so the paths the README uses
+work there; an installed package has the same two folders inside it. `mapping_path` accepts what a user
+types: a file that exists, a shipped mapping's name (`enu`), or a checkout-relative path such as
+`mappings/default.yaml` from any directory.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+MAPPINGS_DIR = PACKAGE_DIR / "mappings"
+SCHEMA_PATH = PACKAGE_DIR / "schemas" / "mapping.schema.json"
+DEFAULT_MAPPING = MAPPINGS_DIR / "default.yaml"
+MAPPING_SUFFIX = ".yaml"
+
+
+def shipped_mappings() -> list[str]:
+    """The names of the mappings that ship with the package (`default`, `enu`, ...)."""
+    return sorted(path.stem for path in MAPPINGS_DIR.glob(f"*{MAPPING_SUFFIX}"))
+
+
+def mapping_path(spec: str | Path) -> Path:
+    """The mapping file `spec` stands for: the file itself if it exists; else the shipped mapping of that
+    name (with or without `.yaml`); else a relative path resolved inside the package (`mappings/enu.yaml`).
+    Anything else comes back unchanged, so that reading it reports the path the user gave."""
+    path = Path(spec)
+    if path.exists():
+        return path
+    if path.parent == Path(".") and path.stem in shipped_mappings() and path.suffix in ("", MAPPING_SUFFIX):
+        return MAPPINGS_DIR / f"{path.stem}{MAPPING_SUFFIX}"
+    if not path.is_absolute() and (PACKAGE_DIR / path).is_file():
+        return PACKAGE_DIR / path
+    return path

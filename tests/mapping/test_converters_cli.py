@@ -1,0 +1,50 @@
+"""airsim-mapper converters: the converter catalogue as Markdown, and the README's table generated from it."""
+
+from __future__ import annotations
+
+import re
+
+from harness import ROOT
+
+from airsim_mapper.cli.main import main
+from airsim_mapper.convert.catalog import CONVERTERS, ROS_TO_SIM, SIM_TO_ROS, ConverterInfo, markdown_table
+
+BEGIN, END = "<!-- converters:begin -->", "<!-- converters:end -->"
+
+
+def readme_table() -> str:
+    """The text between the README's converter-table markers, without the blank lines around it."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert text.count(BEGIN) == 1 and text.count(END) == 1, f"README.md needs one {BEGIN} and one {END}"
+    return text.split(BEGIN, 1)[1].split(END, 1)[0].strip("\n") + "\n"
+
+
+def test_the_readme_converter_table_equals_the_catalogue():
+    assert readme_table() == markdown_table(), (
+        f"README.md's converter table is out of date: replace the lines between {BEGIN} and {END} "
+        "with the output of `airsim-mapper converters`"
+    )
+
+
+def test_converters_prints_the_table_and_exits_0(capsys):
+    assert main(["converters"]) == 0
+    assert capsys.readouterr().out == markdown_table()
+
+
+def test_the_table_has_one_row_per_converter_in_catalogue_order():
+    lines = markdown_table().splitlines()
+    assert lines[0] == "| converter | direction | ROS types | what it does |"
+    assert lines[1] == "|---|---|---|---|"
+    names = [re.match(r"\| `([a-z_]+)` \|", line).group(1) for line in lines[2:]]
+    assert names == list(CONVERTERS)
+
+
+def test_a_row_names_the_direction_and_every_ros_type_and_escapes_bars_in_the_summary():
+    services = ("std_srvs/Trigger", "std_srvs/Empty")
+    two_types = ConverterInfo("x", ROS_TO_SIM, services, "service", "m", "f", "a | b")
+    one_type = ConverterInfo("y", SIM_TO_ROS, ("sensor_msgs/Image",), "node", "m", "f", "s")
+    rows = markdown_table([two_types, one_type]).splitlines()[2:]
+    assert rows == [
+        "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | a \\| b |",
+        "| `y` | sim → ROS | `sensor_msgs/Image` | s |",
+    ]

@@ -1,0 +1,116 @@
+"""`make bench`: converter costs and end-to-end figures, side by side in one run; writes out/bench.json.
+
+python -m tools.bench [--quick] [--costs-only] [--profile] [--out out/bench.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from tools.bench import costs, report, scenes
+from tools.bench.e2e import Bench
+
+CAMERA_HZ, LIDAR_HZ, POSE_HZ, SCALE_CAMERA_HZ = 30.0, scenes.LIDAR_HZ, 100.0, 10.0
+SCALE_DRONES = (1, 2, 5, 10)
+
+
+def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
+    """Every end-to-end figure. Each bridge session measures at most one heavy topic (docs/performance.md)."""
+    out: dict[str, Any] = {"baselines": {}, "bridge": {}, "pose": {}, "client_pose": {}, "scale": {}}
+    base = out["baselines"]
+    base["rospy_image"] = bench.rospy_baseline("image", CAMERA_HZ)
+    base["pynng_image"] = bench.pynng_baseline("image", CAMERA_HZ)
+    base["rospy_cloud"] = bench.rospy_baseline("cloud", LIDAR_HZ)
+    base["pynng_cloud"] = bench.pynng_baseline("cloud", LIDAR_HZ)
+
+    single = bench.scene("single", 1, scenes.CameraSetup(1920, 1080, 1 / CAMERA_HZ, (0, 1)), lidar=True)
+    load = bench.scene("load", 1, scenes.CameraSetup(1920, 1080, 1 / 60.0, (0,)))
+
+    def profile(name: str) -> str | None:
+        return str(profile_dir / f"bridge_{name}.prof") if profile_dir else None
+
+    with bench.bridge_session(single, profile=profile("camera")) as session:
+        out["pose"]["idle"] = session.probe("pose_idle", [scenes.pose_topic(1)])
+        # the camera at its nominal 30 Hz, with pose measured alongside: pose under nominal camera load
+        out["bridge"]["camera"] = session.probe("camera", [scenes.image_topic(1), scenes.pose_topic(1)])
+    with bench.bridge_session(single, profile=profile("depth")) as session:
+        out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
+    with bench.bridge_session(single, profile=profile("lidar")) as session:
+        out["bridge"]["lidar"] = session.probe("lidar", [scenes.lidar_topic(1)])
+    with bench.bridge_session(single, fast_frames=False) as session:
+        out["bridge"]["lidar_client_path"] = session.probe("lidar_client", [scenes.lidar_topic(1)])
+    with bench.bridge_session(load, profile=profile("load")) as session:  # 1080p at 60 Hz: saturating
+        out["pose"]["camera_load"] = session.probe("pose_load", [scenes.pose_topic(1), scenes.image_topic(1)])
+
+    load_pose = "/Sim/BenchLoad/robots/Drone1/actual_pose"
+    load_camera = "/Sim/BenchLoad/robots/Drone1/sensors/Cam/scene_camera"
+    out["client_pose"] = {
+        "client_path": bench.client_pose_run(load, load_pose, load_camera, fast_frames=False),
+        "fast_frames": bench.client_pose_run(load, load_pose, load_camera, fast_frames=True),
+    }
+
+    for drones in SCALE_DRONES:
+        scene = bench.scene(f"scale{drones}", drones, scenes.CameraSetup(320, 240, 1 / SCALE_CAMERA_HZ, (0,)))
+        topics = [t for i in range(1, drones + 1) for t in (scenes.pose_topic(i), scenes.image_topic(i))]
+        with bench.bridge_session(scene, profile=profile(f"scale{drones}")) as session:
+            out["scale"][str(drones)] = session.probe(f"scale{drones}", topics)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="out/bench.json")
+    parser.add_argument("--quick", action="store_true", help="shorter measurement windows (3 s)")
+    parser.add_argument("--costs-only", action="store_true", help="only the in-process converter costs")
+    parser.add_argument("--profile", action="store_true", help="cProfile the bridge node of each session")
+    args = parser.parse_args(argv)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    started = time.monotonic()
+    results: dict[str, Any] = {
+        "machine": {
+            "cpus": os.cpu_count(),
+            "python": platform.python_version(),
+            "load_average_at_start": os.getloadavg()[0],
+        },
+        "costs": costs.run(),
+    }
+    print(report.costs_table(results["costs"]), flush=True)
+    if not args.costs_only:
+        workdir = Path(tempfile.mkdtemp(prefix="airsim_mapper_bench_"))
+        profile_dir = workdir if args.profile else None
+        duration = 3.0 if args.quick else 8.0
+        bench = Bench(workdir, warmup_s=2.0, duration_s=duration)
+        try:
+            results["e2e"] = run_e2e(bench, profile_dir)
+        finally:
+            bench.close()
+        results["workdir"] = str(workdir)
+        print(report.e2e_table(results["e2e"]), flush=True)
+    results["targets"] = report.targets(results)
+    results["seconds"] = time.monotonic() - started
+    results["machine"]["load_average_at_end"] = os.getloadavg()[0]
+    print(report.targets_table(results["targets"]), flush=True)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=1, default=float))
+    machine = results["machine"]
+    print(
+        f"results: {out} ({results['seconds']:.0f} s); load average {machine['load_average_at_start']:.1f} "
+        f"at start, {machine['load_average_at_end']:.1f} at end, on {machine['cpus']} cores"
+    )
+    if max(machine["load_average_at_start"], machine["load_average_at_end"]) > (machine["cpus"] or 1) / 2:
+        print(
+            "warning: other work was running on this machine; the end-to-end figures are not representative"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,219 @@
+"""Per-message CPU cost, from the simulator's frame bytes to a serialised ROS message (one process).
+
+Each case is one frame, packed exactly as the headless server (and the C++ server) packs it, taken through:
+- bridge: the fast-frames proxy, the client's own unpacking of the (small) frame it returns, resolve, the
+  bridge's converter and genpy serialisation;
+- client: the client's msgpack unpacking of the full frame, the bridge's converter, serialisation;
+- reference: the client's unpacking, the old bridge's algorithm (reference.py), serialisation;
+- bare: genpy serialisation of an already built message holding the same data (what rospy alone costs).
+Times are CPU time of this process (`time.process_time`), median over repeats.
+"""
+
+from __future__ import annotations
+
+import io
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import msgpack
+import numpy as np
+from sensor_msgs.msg import Image
+
+from airsim_mapper.convert import registry
+from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.image import BufferImage
+from airsim_mapper.simserver import protocol
+from tools.bench import reference
+from tools.bench.recv_proxy import FastFrames
+
+FULL_HD = (1920, 1080)
+SMALL = (320, 240)  # the per-pixel reference runs here and is scaled by the pixel count
+LIDAR_POINTS = 100_000
+RADAR_DETECTIONS = 200
+STAMP_NS = 1_700_000_000_000_000_000
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    frame: bytes
+    converter: str
+    reference: Callable[[dict], Any] | None
+    reference_frame: bytes | None = None  # the reference's own input (a smaller frame), if different
+    reference_scale: float = 1.0  # reference time multiplier (pixel count ratio)
+    repeat: int = 15
+
+
+def serialize(msg: Any) -> bytes:
+    buffer = io.BytesIO()
+    msg.serialize(buffer)
+    return buffer.getvalue()
+
+
+def client_unpack(frame: bytes) -> Any:
+    """The 1.1.0 client's receive path: outer frame with raw=True, then the body with raw=False."""
+    return msgpack.unpackb(msgpack.unpackb(frame, raw=True)[2], raw=False)
+
+
+def _frame(topic: str, message: dict) -> bytes:
+    return protocol.encode_frame(topic, protocol.pack(message))
+
+
+def image_frame(width: int, height: int, encoding: str, seed: int = 0) -> bytes:
+    rng = np.random.default_rng(seed)
+    message: dict[str, Any] = {
+        "time_stamp": STAMP_NS,
+        "height": height,
+        "width": width,
+        "encoding": encoding,
+        "big_endian": False,
+        "step": 1,
+        "data": b"",
+        "data_float": [],
+        "pos_x": 0.0,
+        "pos_y": 0.0,
+        "pos_z": -4.0,
+        "rot_w": 1.0,
+        "rot_x": 0.0,
+        "rot_y": 0.0,
+        "rot_z": 0.0,
+        "annotations": [],
+    }
+    depth = (rng.random(width * height) * 100).astype(np.float32)
+    if encoding == "BGR":
+        message["data"] = rng.integers(0, 256, width * height * 3, dtype=np.uint8).tobytes()
+    elif encoding == "16FC1":
+        message["data"] = depth.astype("<f2").tobytes()
+    else:  # the git server's 32FC1: pixels as a msgpack float32 array
+        message["data_float"] = depth
+    return _frame("/Sim/Bench/robots/Drone1/sensors/Camera/scene_camera", message)
+
+
+def lidar_frame(points: int = LIDAR_POINTS, seed: int = 0) -> bytes:
+    rng = np.random.default_rng(seed)
+    message = {
+        "time_stamp": STAMP_NS,
+        "point_cloud": rng.normal(scale=20.0, size=3 * points).astype(np.float32),
+        "azimuth_elevation_range_cloud": np.zeros(0, dtype=np.float32),
+        "segmentation_cloud": rng.integers(0, 255, points).astype(np.int32),
+        "intensity_cloud": rng.random(points).astype(np.float32),
+        "laser_index_cloud": rng.integers(0, 16, points).astype(np.int32),
+        "pose": {
+            "position": {"x": 0.0, "y": 0.0, "z": -4.0},
+            "orientation": {"w": 1.0, "x": 0, "y": 0, "z": 0},
+        },
+    }
+    return _frame("/Sim/Bench/robots/Drone1/sensors/lidar1/lidar", message)
+
+
+def radar_frame(detections: int = RADAR_DETECTIONS, seed: int = 0) -> bytes:
+    rng = np.random.default_rng(seed)
+    rows = rng.random((detections, 5)) + 0.1
+    message = {
+        "time_stamp": STAMP_NS,
+        "radar_detections": [
+            {"range": r * 50, "azimuth": a - 0.5, "elevation": e - 0.5, "velocity": v, "rcs_sqm": s}
+            for r, a, e, v, s in rows.tolist()
+        ],
+        "pose": {
+            "position": {"x": 0.0, "y": 0.0, "z": -4.0},
+            "orientation": {"w": 1.0, "x": 0, "y": 0, "z": 0},
+        },
+    }
+    return _frame("/Sim/Bench/robots/Drone1/sensors/radar1/radar_detections", message)
+
+
+def as_genpy(msg: Any) -> Any:
+    """The same message as plain genpy builds it: a BufferImage becomes an Image holding bytes.
+
+    The bare-serialisation baseline is genpy's own serialiser on bytes, as any rospy node would publish.
+    """
+    if isinstance(msg, BufferImage):
+        fields = {name: getattr(msg, name) for name in Image.__slots__}
+        return Image(**{**fields, "data": bytes(msg.data)})
+    return msg
+
+
+def cases() -> list[Case]:
+    scale = (FULL_HD[0] * FULL_HD[1]) / (SMALL[0] * SMALL[1])
+    return [
+        Case("image 1920x1080 BGR", image_frame(*FULL_HD, "BGR"), "image", reference.bgr_to_image),
+        Case(
+            "depth 1920x1080 (16FC1, 1.1.0 server)",
+            image_frame(*FULL_HD, "16FC1"),
+            "image",
+            reference.depth_32fc1_to_image,
+            image_frame(*SMALL, "32FC1"),
+            scale,
+        ),
+        Case(
+            "depth 1920x1080 (32FC1 data_float, git server)",
+            image_frame(*FULL_HD, "32FC1"),
+            "image",
+            reference.depth_32fc1_to_image,
+            image_frame(*SMALL, "32FC1"),
+            scale,
+            repeat=5,
+        ),
+        Case("lidar 100k points", lidar_frame(), "pointcloud", reference.lidar_to_cloud),
+        Case("radar 200 detections", radar_frame(), "radar_scan", reference.radar_to_scan, repeat=50),
+    ]
+
+
+def cpu_ms(fn: Callable[[], Any], repeat: int) -> float:
+    """Median CPU time (ms) of `fn` over `repeat` calls after one warm-up call."""
+    fn()
+    samples = []
+    for _ in range(repeat):
+        start = time.process_time()
+        fn()
+        samples.append((time.process_time() - start) * 1e3)
+    return statistics.median(samples)
+
+
+def measure_case(case: Case, fast: FastFrames) -> dict[str, Any]:
+    convert = registry.get(case.converter)
+    ctx = ConvertContext(frame_id="bench")
+
+    def bridge() -> bytes:
+        message = fast.resolve(client_unpack(fast.rewrite(case.frame)))
+        return serialize(convert(message, ctx))
+
+    def client() -> bytes:
+        return serialize(convert(client_unpack(case.frame), ctx))
+
+    plain = as_genpy(convert(client_unpack(case.frame), ctx))
+    result: dict[str, Any] = {
+        "frame_bytes": len(case.frame),
+        "client_path_ms": cpu_ms(client, case.repeat),
+        "bare_serialize_ms": cpu_ms(lambda: serialize(plain), case.repeat),
+        "unpack_client_ms": cpu_ms(lambda: client_unpack(case.frame), case.repeat),
+        "unpack_fast_ms": cpu_ms(lambda: fast.resolve(client_unpack(fast.rewrite(case.frame))), case.repeat),
+    }
+    try:
+        same = bridge() == client()
+    except ConversionError as exc:  # a converter that cannot take numpy input yet: say so in the results
+        result["bridge_error"] = str(exc)
+        return result
+    if not same:
+        raise AssertionError(f"{case.name}: the fast path serialises differently from the client path")
+    result["bridge_ms"] = cpu_ms(bridge, case.repeat)
+    result["ratio_to_bare_serialize"] = result["bridge_ms"] / max(result["bare_serialize_ms"], 1e-6)
+    if case.reference is not None:
+        ref_frame = case.reference_frame or case.frame
+        ref_repeat = 1 if case.reference_scale > 1 else max(3, case.repeat // 3)
+        measured = cpu_ms(lambda: serialize(case.reference(client_unpack(ref_frame))), ref_repeat)
+        result["reference_ms"] = measured * case.reference_scale
+        result["reference_extrapolated"] = case.reference_scale > 1
+        if "bridge_ms" in result:
+            result["speedup_vs_reference"] = result["reference_ms"] / max(result["bridge_ms"], 1e-6)
+    return result
+
+
+def run() -> dict[str, dict[str, Any]]:
+    fast = FastFrames(lambda topic: True, views=True)  # as the bridge's receive loop decodes
+    return {case.name: measure_case(case, fast) for case in cases()}

@@ -1,0 +1,249 @@
+"""End-to-end runs: replay server -> bridge node -> probe (three processes), next to the raw transports.
+
+A `Bench` owns one private roscore and a work folder. `bridge_session` starts a replay server and a bridge
+node on a generated scene; `probe` measures the given topics through them while /proc samples the CPU and
+memory of the node (and the server). `rospy_baseline` and `pynng_baseline` measure the bare transports
+with the same probe logic, in the same run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tools.bench import scenes
+from tools.bench.baselines import RAW_TOPIC
+from tools.bench.sampling import cpu_share, sample
+from tools.rig import Child, Rig, free_port, port_open, wait_until
+
+FIRST_MESSAGE_TIMEOUT_S = 120.0
+
+
+class BenchError(RuntimeError):
+    """The benchmark could not start or finish one of its runs."""
+
+
+def wait_line(child: Child, word: str, timeout: float) -> None:
+    def seen() -> bool:
+        text = child.output()
+        if "failed:" in text:
+            raise BenchError(f"{child.name}: {text.strip().splitlines()[-1]}")
+        if not child.alive() and word not in text:
+            raise BenchError(f"{child.name} exited early:\n{text}")
+        return any(line.strip() == word for line in text.splitlines())
+
+    wait_until(seen, timeout, f"{child.name} to print {word!r}", interval=0.1)
+
+
+@dataclass
+class Session:
+    bench: Bench
+    server: Child
+    node: Child
+
+    def probe(self, label: str, topics: Sequence[str]) -> dict[str, Any]:
+        """Rate and latency of `topics`, with the CPU (cores) and RSS of the node and server meanwhile."""
+        return self.bench.measure(label, topics, {"bridge": self.node, "server": self.server})
+
+
+@dataclass
+class Bench:
+    workdir: Path
+    warmup_s: float = 2.0
+    duration_s: float = 8.0
+
+    def __post_init__(self) -> None:
+        self.procs = Rig(self.workdir)
+        self.config_dir = self.workdir / "sim_config"
+        self.roscore = self.procs.roscore()
+
+    def close(self) -> None:
+        self.procs.stop_all()
+
+    def module(self, name: str, module: str, *args: str) -> Child:
+        """Run `python -m module args` in the bench's rig."""
+        return self.procs.python(name, ["-m", module, *args])
+
+    # -- measuring
+
+    def measure(self, label: str, topics: Sequence[str], watched: dict[str, Child]) -> dict[str, Any]:
+        out = self.workdir / f"probe_{label}.json"
+        probe = self.module(
+            f"probe_{label}",
+            "tools.bench.probe",
+            "--out",
+            str(out),
+            "--warmup",
+            str(self.warmup_s),
+            "--duration",
+            str(self.duration_s),
+            "--first-timeout",
+            str(FIRST_MESSAGE_TIMEOUT_S),
+            *topics,
+        )
+        try:
+            wait_line(probe, "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
+            before = {name: sample(child.pid) for name, child in watched.items()}
+            wait_line(probe, "done", self.duration_s + 30)
+            after = {name: sample(child.pid) for name, child in watched.items()}
+            wait_until(out.exists, 10, f"{out.name}")
+            time.sleep(0.1)
+            result = json.loads(out.read_text())
+        finally:
+            self.procs.stop(probe)
+        for name in watched:
+            result[f"{name}_cpu_cores"] = cpu_share(before[name], after[name])
+            result[f"{name}_rss_mb"] = after[name].rss_mb
+        return result
+
+    # -- the bridge
+
+    def _replay_server(self, log_level: str) -> tuple[Child, int, int]:
+        """Start the replay server on free ports: (process, topics port, services port)."""
+        topics_port, services_port = free_port(), free_port()
+        server = self.module(
+            "replay_server",
+            "tools.bench.replay_server",
+            "--address",
+            "127.0.0.1",
+            "--topicsport",
+            str(topics_port),
+            "--servicesport",
+            str(services_port),
+            "--log-level",
+            log_level,
+        )
+        return server, topics_port, services_port
+
+    @contextlib.contextmanager
+    def bridge_session(
+        self,
+        scene_file: str,
+        fast_frames: bool | str = True,
+        profile: str | None = None,
+        node_args: Sequence[str] = (),
+    ) -> Iterator[Session]:
+        server, topics_port, services_port = self._replay_server("WARNING")
+        node: Child | None = None
+        try:
+            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
+            node = self.module(
+                "bridge",
+                "tools.bench.node",
+                "--fast-frames",
+                fast_frames if isinstance(fast_frames, str) else ("on" if fast_frames else "off"),
+                "--topicsport",
+                str(topics_port),
+                "--servicesport",
+                str(services_port),
+                "--simconfigpath",
+                str(self.config_dir),
+                "--scene",
+                scene_file,
+                "--nodename",
+                "bench_bridge",
+                *(["--profile", profile] if profile else []),
+                *node_args,
+            )
+            yield Session(self, server, node)
+        finally:
+            if node is not None:
+                self.procs.stop(node)
+            self.procs.stop(server)
+            time.sleep(0.5)  # let the master drop the node's registrations
+
+    def client_pose_run(self, scene_file: str, pose: str, camera: str, fast_frames: bool) -> dict[str, Any]:
+        """Pose through the bare client (no bridge, no ROS), idle then under camera load."""
+        server, topics_port, services_port = self._replay_server("ERROR")
+        out = self.workdir / f"client_pose_{int(fast_frames)}.json"
+        probe: Child | None = None
+        try:
+            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
+            probe = self.module(
+                "client_probe",
+                "tools.bench.client_probe",
+                "--topicsport",
+                str(topics_port),
+                "--servicesport",
+                str(services_port),
+                "--simconfigpath",
+                str(self.config_dir),
+                "--scene",
+                scene_file,
+                "--pose",
+                pose,
+                "--camera",
+                camera,
+                "--out",
+                str(out),
+                "--seconds",
+                str(min(self.duration_s, 5.0)),
+                *(["--fast-frames"] if fast_frames else []),
+            )
+            wait_line(probe, "done", FIRST_MESSAGE_TIMEOUT_S)
+            return json.loads(out.read_text())
+        finally:
+            if probe is not None:
+                self.procs.stop(probe)
+            self.procs.stop(server)
+
+    # -- baselines
+
+    def rospy_baseline(self, kind: str, rate: float) -> dict[str, Any]:
+        publisher = self.module(
+            f"rospy_{kind}", "tools.bench.baselines", "rospy-pub", "--kind", kind, "--rate", str(rate)
+        )
+        try:
+            return self.measure(f"rospy_{kind}", [RAW_TOPIC], {"publisher": publisher})
+        finally:
+            self.procs.stop(publisher)
+            time.sleep(0.5)
+
+    def pynng_baseline(self, kind: str, rate: float) -> dict[str, Any]:
+        port = free_port()
+        sender = self.module(
+            f"pynng_send_{kind}",
+            "tools.bench.baselines",
+            "pynng-send",
+            "--kind",
+            kind,
+            "--rate",
+            str(rate),
+            "--port",
+            str(port),
+        )
+        out = self.workdir / f"pynng_{kind}.json"
+        receiver: Child | None = None
+        try:
+            wait_until(lambda: port_open(port), 30, "the pynng sender")
+            receiver = self.module(
+                f"pynng_recv_{kind}",
+                "tools.bench.baselines",
+                "pynng-recv",
+                "--port",
+                str(port),
+                "--warmup",
+                str(self.warmup_s),
+                "--duration",
+                str(self.duration_s),
+                "--out",
+                str(out),
+            )
+            wait_line(receiver, "done", 60 + self.duration_s + 30)  # it measures its own CPU time
+            return json.loads(out.read_text())
+        finally:
+            if receiver is not None:
+                self.procs.stop(receiver)
+            self.procs.stop(sender)
+
+    # -- scenes
+
+    def scene(
+        self, name: str, drones: int, camera: scenes.CameraSetup | None = None, lidar: bool = False
+    ) -> str:
+        return scenes.write_scene(self.config_dir, name, drones, camera, lidar)

@@ -1,0 +1,112 @@
+"""A ROS subscriber process that measures delivered rate and latency (receive time - header stamp).
+
+Messages are taken as `rospy.AnyMsg` (no deserialisation: the probe costs as little as possible); the
+stamp is read from the serialised header (seq, secs, nsecs are its first 12 bytes), so every stamped type
+works. It waits until every topic delivered once, lets them run for --warmup s, prints `measuring`,
+records for --duration s, prints `done` and writes its JSON result to --out.
+
+    python -m tools.bench.probe --out result.json [--warmup S] [--duration S] TOPIC...
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import struct
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+HEADER = struct.Struct("<III")
+SOCKET_BUFFER = 1 << 24
+
+
+@dataclass
+class TopicRecord:
+    latencies_ms: list[float] = field(default_factory=list)
+    bytes: int = 0
+    seen: int = 0
+
+
+def summary(record: TopicRecord, seconds: float) -> dict[str, Any]:
+    lat = np.asarray(record.latencies_ms, dtype=float)
+    out: dict[str, Any] = {"count": int(lat.size), "rate_hz": lat.size / seconds, "bytes": record.bytes}
+    if lat.size:
+        out.update(
+            latency_p50_ms=float(np.percentile(lat, 50)),
+            latency_p99_ms=float(np.percentile(lat, 99)),
+            latency_mean_ms=float(lat.mean()),
+            message_bytes=record.bytes // lat.size,
+        )
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    import rospy
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("topics", nargs="+")
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--warmup", type=float, default=2.0)
+    parser.add_argument("--duration", type=float, default=8.0)
+    parser.add_argument("--first-timeout", type=float, default=60.0)
+    args = parser.parse_args(rospy.myargv(argv)[1:] if argv is None else argv)
+    rospy.init_node("bench_probe", anonymous=True, disable_signals=True)
+    records = {topic: TopicRecord() for topic in args.topics}
+    lock = threading.Lock()
+    state = {"recording": False}
+
+    def callback(msg: Any, topic: str) -> None:
+        now = time.time()
+        data = msg._buff
+        secs, nsecs = HEADER.unpack_from(data, 0)[1:]
+        with lock:
+            record = records[topic]
+            record.seen += 1
+            if state["recording"]:
+                record.latencies_ms.append((now - (secs + nsecs * 1e-9)) * 1e3)
+                record.bytes += len(data)
+
+    subscribers = [
+        rospy.Subscriber(
+            topic,
+            rospy.AnyMsg,
+            callback,
+            callback_args=topic,
+            queue_size=1,
+            buff_size=SOCKET_BUFFER,
+            tcp_nodelay=True,
+        )
+        for topic in args.topics
+    ]
+    deadline = time.monotonic() + args.first_timeout
+    while any(r.seen == 0 for r in records.values()):
+        if time.monotonic() > deadline:
+            silent = [t for t, r in records.items() if r.seen == 0]
+            print(f"failed: no message on {', '.join(silent)}", flush=True)
+            return 1
+        time.sleep(0.05)
+    time.sleep(args.warmup)
+    with lock:
+        state["recording"] = True
+        start = time.monotonic()
+    print("measuring", flush=True)
+    time.sleep(args.duration)
+    with lock:
+        state["recording"] = False
+        seconds = time.monotonic() - start
+    print("done", flush=True)
+    result = {topic: summary(record, seconds) for topic, record in records.items()}
+    with open(args.out, "w") as handle:
+        json.dump({"seconds": seconds, "topics": result}, handle)
+    for subscriber in subscribers:
+        subscriber.unregister()
+    rospy.signal_shutdown("probe done")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,98 @@
+"""The headless server with pre-rendered sensor data, so that the benchmark measures the bridge.
+
+Cameras and lidars still run on the server's own schedule, and every message is still built by
+`simserver.messages` and sent by the server's `TopicHub` (protocol-faithful frames, the same sockets and
+services); only the ray casting is replaced by a cache. A camera's first frame of each size is rendered
+at an eighth of the resolution and scaled up by pixel repetition (ray casting 1080p would take seconds),
+a lidar's first scan is cast once and then repeated. Cameras render in the server's own process
+(`--render-in-process`): a render worker, a child process, would not have the cache.
+
+    python -m tools.bench.replay_server --topicsport P --servicesport Q
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from airsim_mapper.simserver import camera, lidar
+from airsim_mapper.simserver.cli import main as server_main
+
+MAX_RENDER_PIXELS = 320 * 240
+
+
+def _reduction(width: int, height: int) -> int:
+    """The largest factor in 1..8 dividing both sides that brings the render under MAX_RENDER_PIXELS."""
+    for factor in range(1, 9):
+        if (
+            width % factor == 0
+            and height % factor == 0
+            and (width // factor) * (height // factor) <= MAX_RENDER_PIXELS
+        ):
+            return factor
+    return max(f for f in range(1, 9) if width % f == 0 and height % f == 0)
+
+
+def _upscale(image: camera.RenderedImage, factor: int, width: int, height: int) -> camera.RenderedImage:
+    channels = 3 if image.encoding == "BGR" else 1
+    dtype = np.uint8 if image.encoding == "BGR" else np.dtype("<f2")
+    pixels = np.frombuffer(image.data, dtype=dtype).reshape(image.height, image.width, channels)
+    big = np.repeat(np.repeat(pixels, factor, axis=0), factor, axis=1)
+    return camera.RenderedImage(image.encoding, width, height, np.ascontiguousarray(big).tobytes())
+
+
+def cached_render(real_render: Any) -> Any:
+    cache: dict[tuple, dict[int, camera.RenderedImage]] = {}
+
+    def render(
+        world: Any,
+        position: Any,
+        orientation: Any,
+        width: int,
+        height: int,
+        fov: float,
+        types: Any,
+        *more: Any,
+    ):
+        """`camera.render`'s signature; `more` (depth scale, range) is part of the cache key."""
+        key = (width, height, float(fov), tuple(types), *more)
+        if key not in cache:
+            factor = _reduction(width, height)
+            small = real_render(
+                world, position, orientation, width // factor, height // factor, fov, types, *more
+            )
+            cache[key] = {t: _upscale(img, factor, width, height) for t, img in small.items()}
+        return cache[key]
+
+    return render
+
+
+def cached_scan(real_scan: Any) -> Any:
+    cache: dict[int, dict[str, Any]] = {}
+
+    def scan(self: lidar.LidarModel, world: Any, position: Any, orientation: Any, start_ns: int, end_ns: int):
+        if id(self) not in cache:
+            period = int(1e9 / self.rotation_hz)
+            cache[id(self)] = real_scan(self, world, position, orientation, end_ns - period, end_ns)
+        return cache[id(self)]
+
+    return scan
+
+
+def install_replay() -> None:
+    camera.render = cached_render(camera.render)
+    lidar.LidarModel.scan = cached_scan(lidar.LidarModel.scan)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The headless server with the cache installed; it renders in its own process, where the cache is."""
+    install_replay()
+    args = list(sys.argv[1:] if argv is None else argv)
+    return server_main([*args, "--render-in-process"] if "--render-in-process" not in args else args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

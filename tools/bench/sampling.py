@@ -1,0 +1,34 @@
+"""/proc samples of the benchmark's processes: CPU seconds and resident memory, and cores used between two."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+
+CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
+PAGE_BYTES = os.sysconf("SC_PAGE_SIZE")
+
+
+@dataclass(frozen=True)
+class CpuSample:
+    """CPU seconds (user + system) and resident memory of one process at one moment."""
+
+    wall: float
+    cpu_s: float
+    rss_mb: float
+
+
+def sample(pid: int) -> CpuSample:
+    """utime + stime from /proc/<pid>/stat and the resident set size from /proc/<pid>/statm."""
+    with open(f"/proc/{pid}/stat") as handle:
+        fields = handle.read().rsplit(")", 1)[1].split()
+    with open(f"/proc/{pid}/statm") as handle:
+        resident_pages = int(handle.read().split()[1])
+    cpu = (int(fields[11]) + int(fields[12])) / CLOCK_TICKS  # fields 14 and 15 of stat(5)
+    return CpuSample(time.monotonic(), cpu, resident_pages * PAGE_BYTES / 2**20)
+
+
+def cpu_share(start: CpuSample, end: CpuSample) -> float:
+    """Cores used between two samples (1.0 = one core busy all the time)."""
+    return (end.cpu_s - start.cpu_s) / max(end.wall - start.wall, 1e-9)

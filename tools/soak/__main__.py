@@ -1,0 +1,7 @@
+"""`python -m tools.soak`."""
+
+import sys
+
+from tools.soak.soak import main
+
+sys.exit(main())
