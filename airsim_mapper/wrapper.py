@@ -55,7 +55,13 @@ def redirect_client_log() -> None:
 
 
 class ProjectAirSimWrapper:
-    """Runs the bridge for a mapping on a Project AirSim client, in the calling ROS node."""
+    """Runs the bridge for a mapping on a Project AirSim client, in the calling ROS node.
+
+    The wrapper changes nothing process-wide unless asked: with `tune_process=True` (what the node does)
+    it limits numpy's OpenBLAS to one thread, lowers the interpreter's switch interval to 0.5 ms, makes
+    every rospy publisher of the process send on the publishing thread when the socket takes the message
+    at once, and freezes the heap after each scene change (`gc.freeze`); engine/realtime.py explains why.
+    """
 
     def __init__(
         self,
@@ -72,6 +78,7 @@ class ProjectAirSimWrapper:
         disconnect_on_shutdown: bool | None = None,
         client_factory: Callable[[], Any] | None = None,
         shutdown_timeout: float = SHUTDOWN_TIMEOUT_S,
+        tune_process: bool = False,
     ) -> None:
         redirect_client_log()
         self.shutdown_timeout = shutdown_timeout
@@ -83,7 +90,13 @@ class ProjectAirSimWrapper:
         self.sim_config_path = str(sim_config_path)
         name = node_name if node_name is not None else rospy.get_name().lstrip("/")
         self.engine = Engine(
-            client, self.mapping, self.sim_config_path, name, namespace, client_factory=client_factory
+            client,
+            self.mapping,
+            self.sim_config_path,
+            name,
+            namespace,
+            client_factory=client_factory,
+            tune=tune_process,
         )
         self.master_watch = MasterWatch()
         self.diagnostics = Diagnostics(self.engine, name)

@@ -167,6 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_on_shutdown=True,  # this node made the client
         client_factory=partial(open_client, args.address, args.topicsport, args.servicesport),
         shutdown_timeout=max(0.5, args.shutdown_timeout - 1.5),  # rospy's own unregistering comes after
+        tune_process=True,  # this process is the bridge's own
     )
     try:
         if args.scene:

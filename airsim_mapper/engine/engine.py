@@ -94,8 +94,11 @@ class Engine:
         namespace: str = "",
         load_world: Callable[[Any, Scene, str], Any] | None = None,
         client_factory: Callable[[], Any] | None = None,
+        tune: bool = False,
     ) -> None:
-        tune_process()
+        if tune:
+            tune_process()
+        self._freeze_heap = tune  # gc.freeze is process-wide: only for a process that asked for tuning
         self.gc_pauses = GcPauses()
         self.gc_frozen = 0
         self.client = client
@@ -142,7 +145,8 @@ class Engine:
         specs = self.specs_for(scene)
         with self._lock:
             self._stop_scene_bridges(keep={s.name: s for s in specs})
-            thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
+            if self._freeze_heap:
+                thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
             self.shared.clear()
             streaming: list[StreamingImage] = [
@@ -154,9 +158,10 @@ class Engine:
                 bridge = build(spec, self.services, streaming)
                 bridge.start()
                 self.bridges[spec.name] = bridge
-            took_ms = freeze_heap()
-            self.gc_frozen = gc.get_freeze_count()  # counted here once: counting walks every frozen object
-            log.debug("heap frozen in %.1f ms (%d objects)", took_ms, self.gc_frozen)
+            if self._freeze_heap:
+                took_ms = freeze_heap()
+                self.gc_frozen = gc.get_freeze_count()  # counted once here: counting walks every object
+                log.debug("heap frozen in %.1f ms (%d objects)", took_ms, self.gc_frozen)
         return specs
 
     def _stop_scene_bridges(self, keep: dict[str, BridgeSpec]) -> None:

@@ -7,9 +7,11 @@
   `request_async` (whose error handler disconnects the client): each call gets its own NNG context on one
   asyncio loop owned by this link, so a long motion command never blocks other requests.
 - Callbacks run on the client's receive thread; they must only hand messages over (see streams.py).
-- Receiving: the client's own receive loop ends for good on the first undecodable frame (and a callback
-  error kills it). The link runs its own loop on the client's socket instead (`_receive`, the same
-  dispatch): a malformed frame is dropped, counted in `bad_frames` and reported at most every 5 s.
+- Receiving: the client's own receive loop decodes every frame element by element and ends for good on
+  the first undecodable frame (or a failing callback). The bridge's loop (`receive`, the same dispatch)
+  replaces it whatever the order in which a mission script made `World` and the bridge: a malformed frame
+  is dropped, counted in `bad_frames` and reported at most every 5 s; large frames that only the bridge
+  listens to skip msgpack's per-element lists; every other callback gets what the client would give it.
 - Liveness: the link notices when a connection drops (an NNG pipe removal on either socket: the server
   died or restarted) and offers a cheap `probe`. A link marked dead answers every call at once with
   SimLinkError instead of waiting on sockets that will never answer (see health.py and Engine's reconnect).
@@ -36,6 +38,10 @@ TopicCallback = Callable[[Any, Any], None]
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
 PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 WARN_PERIOD_S = 5.0
+RECEIVE_THREAD = "sim-receive"
+CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
+TAKE_OVER_WAIT_S = 1.0
+CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
 
 
 class SimLinkError(RuntimeError):
@@ -78,51 +84,52 @@ class SimLink:
 
     # --- receiving --------------------------------------------------------------------------
     def ensure_receiver(self) -> bool:
-        """Run our receive loop on the client unless a live one runs already; True if one was started."""
+        """Make the bridge's receive loop the client's, whoever started receiving; True if it started.
+
+        The loop dispatches through the client's current link (this one from now on). With no receive
+        thread yet, it gets its own thread, which the client then keeps using. A thread the client started
+        itself (a mission script that made `World` first) is taken over: its per-frame read is replaced, so
+        that thread runs this loop instead of the client's, which would decode every frame element by
+        element and stop for good on the first undecodable one.
+        """
         client = self.client
-        thread = getattr(client, "recv_topic_thread", None)
-        if self.dead or client.socket_topics is None or (thread is not None and thread.is_alive()):
+        if self.dead or client.socket_topics is None:
             return False
+        setattr(client, CURRENT_LINK, self)
+        thread = getattr(client, "recv_topic_thread", None)
+        if thread is not None and thread.is_alive():
+            return _take_over(client)
         if thread is not None and not client.state:
             return False  # disconnected on purpose
         client.socket_topics.recv_timeout = 100  # bounded block so the loop sees `state` change
-        client.recv_topic_thread = threading.Thread(target=self._receive, name="sim-receive", daemon=True)
+        client.recv_topic_thread = threading.Thread(target=receive, args=(client,), name=RECEIVE_THREAD)
+        client.recv_topic_thread.daemon = True
         client.recv_topic_thread.start()
         if thread is not None:
             self._bad_frame("the client's receive loop had stopped; receiving again")
         return True
 
-    def _receive(self) -> None:
+    def dispatch(self, packed: bytes) -> None:
+        """One frame off the topics socket: decode it and hand the message to the topic's callbacks."""
         import msgpack
-        import pynng
 
-        client, sock = self.client, self.client.socket_topics
-        while client.state:
-            try:
-                packed = sock.recv()
-            except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
-                continue
-            except pynng.exceptions.Closed:
+        client = self.client
+        try:
+            frame = msgpack.unpackb(packed, raw=True)
+            topic = frame[1].decode("utf-8")
+            entry = client.subs.get(topic)
+            if entry is None:
                 return
-            except pynng.exceptions.NNGException as exc:
-                self._bad_frame(f"receive failed: {exc}")
-                continue
+            message = self._decode(topic, entry, frame[2])
+        except Exception as exc:
+            self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
+            return
+        info = client.topics.get(topic) or _unknown_topic(topic)
+        for callback in entry["callbacks"]:
             try:
-                frame = msgpack.unpackb(packed, raw=True)
-                topic = frame[1].decode("utf-8")
-                entry = client.subs.get(topic)
-                if entry is None:
-                    continue
-                message = self._decode(topic, entry, frame[2])
+                callback(info, message)
             except Exception as exc:
-                self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
-                continue
-            info = client.topics.get(topic) or _unknown_topic(topic)
-            for callback in entry["callbacks"]:
-                try:
-                    callback(info, message)
-                except Exception as exc:
-                    self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
+                self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
 
     def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
         """The message of a frame body. Large bodies that only the bridge listens to are decoded with
@@ -337,6 +344,62 @@ class SimLink:
                         self.client.subs.pop(topic, None)
         self.stop_loop()
         return answered
+
+
+def receive(client: Any) -> None:
+    """The bridge's receive loop on a client's topics socket, until the client stops or the socket closes.
+
+    Each frame goes to the client's current link (`SimLink.dispatch`): a malformed frame or a failing
+    callback is dropped and counted there, and the loop goes on.
+    """
+    import pynng
+
+    sock = client.socket_topics
+    while client.state:
+        try:
+            packed = sock.recv()
+        except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
+            continue
+        except pynng.exceptions.Closed:
+            return
+        except pynng.exceptions.NNGException as exc:
+            getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
+            continue
+        getattr(client, CURRENT_LINK).dispatch(packed)
+
+
+def _take_over(client: Any) -> bool:
+    """Make the client's own receive thread run `receive`; True if it was not doing so already.
+
+    The client's loop reads each frame through its private `__recv_topic_frame` and then decodes and
+    dispatches it itself. An instance attribute of that name shadows the method: the thread's next read
+    enters `receive` and stays there until the client stops; the frame read before the swap is the
+    client's last, and this call waits for the swap. A client without that method (another version)
+    keeps its own loop, with a warning.
+    """
+    if getattr(client.recv_topic_thread, "name", "") == RECEIVE_THREAD or CLIENT_READ in vars(client):
+        return False
+    if not callable(getattr(type(client), CLIENT_READ, None)):
+        log.warning("this projectairsim client has no %s: its own receive loop stays in use", CLIENT_READ)
+        vars(client)[CLIENT_READ] = None  # warns once; a client without the method never reads it
+        return False
+
+    entered = threading.Event()
+
+    def read() -> None:
+        entered.set()
+        receive(client)
+        if client.state:  # the socket closed under a live client: the client's loop would spin
+            time.sleep(0.1)
+
+    vars(client)[CLIENT_READ] = read
+    # The client's thread reads again within its 100 ms receive timeout; until then a frame would still
+    # be the client's to decode, so the bridge subscribes nothing before the swap has happened.
+    if not entered.wait(TAKE_OVER_WAIT_S):
+        log.warning(
+            "the client's receive thread did not pick up the bridge's loop within %g s", TAKE_OVER_WAIT_S
+        )
+    return True
 
 
 def _unknown_topic(topic: str) -> Any:
