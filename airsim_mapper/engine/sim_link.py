@@ -132,22 +132,9 @@ class SimLink:
                 self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
 
     def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
-        """The message of a frame body. Large bodies that only the bridge listens to are decoded with
-        their float/int arrays straight into numpy (fast_frames.decode_map), skipping the per-element
-        Python lists msgpack would build (docs/performance.md has the cost), and their large bin values
-        (image pixels) as memoryviews of the body, which the image converter publishes without a copy.
-        Everything else, and anything unusual, takes msgpack's path, exactly as the client would."""
-        import msgpack
-
-        if len(body) >= FAST_MIN_BYTES and self._only_ours(topic, entry["callbacks"]):
-            try:
-                message = decode_map(body, views=True)
-            except Exception:
-                message = None
-            if message is not None:
-                self.fast_frames += 1
-                return message
-        return msgpack.unpackb(body, raw=False)
+        message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))
+        self.fast_frames += fast
+        return message
 
     def _only_ours(self, topic: str, callbacks: list) -> bool:
         ours = self._ours.get(topic, ())
@@ -344,6 +331,27 @@ class SimLink:
                         self.client.subs.pop(topic, None)
         self.stop_loop()
         return answered
+
+
+def decode_body(body: bytes, fast: bool) -> tuple[Any, bool]:
+    """The message of a frame body, and whether it took the fast path.
+
+    With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
+    straight into numpy (fast_frames.decode_map), skipping the per-element Python lists msgpack would
+    build (docs/performance.md has the cost), and its large bin values (image pixels) as memoryviews of
+    the body, which the image converter publishes without a copy. Everything else, and anything unusual,
+    takes msgpack's path, exactly as the client would.
+    """
+    import msgpack
+
+    if fast and len(body) >= FAST_MIN_BYTES:
+        try:
+            message = decode_map(body, views=True)
+        except Exception:
+            message = None
+        if message is not None:
+            return message, True
+    return msgpack.unpackb(body, raw=False), False
 
 
 def receive(client: Any) -> None:
