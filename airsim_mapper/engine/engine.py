@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from airsim_mapper.convert.command import shorten
-from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
+from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, build
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
@@ -149,13 +149,10 @@ class Engine:
                 thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
             self.shared.clear()
-            streaming: list[StreamingImage] = [
-                b for b in self.bridges.values() if isinstance(b, StreamingImage)
-            ]
             for spec in specs:
                 if spec.name in self.bridges:
                     continue
-                bridge = build(spec, self.services, streaming)
+                bridge = build(spec, self.services)
                 bridge.start()
                 self.bridges[spec.name] = bridge
             if self._freeze_heap:
@@ -247,11 +244,12 @@ class Engine:
             finally:
                 self._loading = None
 
-    def _node_action(self, spec: BridgeSpec, params: dict) -> None:
-        if spec.converter == "load_scene":
-            self.request_scene(params["scene"])
-        else:
-            raise ValueError(f"{spec.name}: converter {spec.converter!r} has no engine action")
+    def _node_action(self, action: str, params: dict) -> None:
+        """An engine action a bridge asked for, by the name the converter catalogue gives it."""
+        actions: dict[str, Callable[[dict], Any]] = {"load_scene": lambda p: self.request_scene(p["scene"])}
+        if action not in actions:
+            raise ValueError(f"the engine has no action {action!r}")
+        actions[action](params)
 
     # --- simulator health and reconnection ---------------------------------------------------
     def _require_link(self, what: str) -> None:
