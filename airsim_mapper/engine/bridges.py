@@ -14,14 +14,12 @@ from collections.abc import Callable, MutableMapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import rospy
-
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.hub import StreamHub
-from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
+from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import SimLink, SimLinkError
 from airsim_mapper.mapping.model import BridgeSpec
 
@@ -33,7 +31,7 @@ WARN_PERIOD_S = 5.0
 class BridgeStats:
     messages: int = 0  # converted and published / forwarded
     errors: int = 0  # rejected or failed
-    last_stamp: Any = None  # header stamp (rospy.Time) of the last published message
+    last_stamp: Any = None  # header stamp (a genpy Time) of the last published message
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
 
@@ -63,23 +61,23 @@ class Services:
 
     sim: SimLink
     hub: StreamHub
-    tf: TfBroadcaster
+    ros: RosLink
     shared: MutableMapping[Any, Any]
     node_action: Callable[[str, dict], Any]  # an engine action by its catalogue name (load_scene)
     streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
 
 
-def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
+def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
     return ConvertContext(
         frame_id=spec.frame_id or "",
         convention=spec.convention,
         stamp=spec.options.stamp,
-        now=rospy.Time.now,
+        now=services.ros.now,
         params=spec.params,
         source=spec.source,
         variables=spec.variables,
         options=spec.options,
-        shared=shared,
+        shared=services.shared,
     )
 
 
@@ -92,7 +90,7 @@ class Bridge:
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
         self.warn = Throttled(spec.name).warn
-        self.ctx = make_context(spec, services.shared)
+        self.ctx = make_context(spec, services)
 
     def after_call(self, params: dict, result: Any) -> None:
         """The catalogue's after-hook, once the simulator accepted a call (a result other than false)."""
@@ -117,7 +115,7 @@ class SimToRos(Bridge):
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        self.publisher: rospy.Publisher | None = None
+        self.publisher: Any = None
         self._attached = False
         self._stopped = False
         self._lock = threading.Lock()
@@ -132,12 +130,12 @@ class SimToRos(Bridge):
     def start(self) -> None:
         spec = self.spec
         if spec.ros is not None:
-            self.publisher = rospy.Publisher(
+            self.publisher = self.services.ros.publisher(
                 spec.ros,
-                message_class(spec.ros_type),
+                spec.ros_type,
                 queue_size=spec.options.queue_size,
                 latch=spec.options.latch,
-                subscriber_listener=PeerListener(self._peers_changed) if self.lazy else None,
+                on_peers=self._peers_changed if self.lazy else None,
             )
         if self.lazy:
             self._peers_changed()
@@ -179,7 +177,7 @@ class SimToRos(Bridge):
         if self.publisher is not None:
             try:
                 self.publisher.publish(out)
-            except rospy.ROSException:  # unregistered by a concurrent stop
+            except ClosedEndpoint:  # unregistered by a concurrent stop
                 return None
         self.stats.messages += 1
         self.stats.last_time = now
@@ -216,17 +214,14 @@ class RosToSim(Bridge):
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        self.subscriber: rospy.Subscriber | None = None
+        self.subscriber: Any = None
         self.last_message = 0.0
         self.moving = False  # a command was sent since the last watchdog stop
         self.pending: Any = None
 
     def start(self) -> None:
-        self.subscriber = rospy.Subscriber(
-            self.spec.ros,
-            message_class(self.spec.ros_type),
-            self.on_message,
-            queue_size=self.spec.options.queue_size,
+        self.subscriber = self.services.ros.subscriber(
+            self.spec.ros, self.spec.ros_type, self.on_message, queue_size=self.spec.options.queue_size
         )
 
     def on_message(self, ros_msg: Any) -> None:
@@ -295,12 +290,12 @@ class RosService(Bridge):
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        self.service: rospy.Service | None = None
+        self.service: Any = None
 
     def start(self) -> None:
-        srv_class = message_class(self.spec.ros_type, "srv")
-        self._response = srv_class._response_class
-        self.service = rospy.Service(self.spec.ros, srv_class, self.on_request)
+        self.service, self._response = self.services.ros.service(
+            self.spec.ros, self.spec.ros_type, self.on_request
+        )
 
     def on_request(self, request: Any) -> Any:
         response = self._response()

@@ -35,7 +35,7 @@ from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, build
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
-from airsim_mapper.engine.ros_link import TfBroadcaster
+from airsim_mapper.engine.ros_link import RosLink
 from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.mapping.errors import ConfigError
@@ -95,6 +95,8 @@ class Engine:
         load_world: Callable[[Any, Scene, str], Any] | None = None,
         client_factory: Callable[[], Any] | None = None,
         tune: bool = False,
+        ros: RosLink | None = None,
+        link: Callable[[Any], SimLink] = SimLink,
     ) -> None:
         if tune:
             tune_process()
@@ -106,11 +108,12 @@ class Engine:
         self.sim_config_path = str(sim_config_path)
         self.node_name = node_name
         self.namespace = namespace
-        self.sim = SimLink(client)
-        self.tf = TfBroadcaster()
-        self.hub = StreamHub(self.sim, self.tf.send)
+        self._link = link
+        self.sim = link(client)
+        self.ros = ros or RosLink()
+        self.hub = StreamHub(self.sim, self.ros.send_tf)
         self.shared: dict[Any, Any] = {}
-        self.services = Services(self.sim, self.hub, self.tf, self.shared, self._node_action)
+        self.services = Services(self.sim, self.hub, self.ros, self.shared, self._node_action)
         self.bridges: dict[str, Bridge] = {}
         self.scene: Scene | None = None
         self.world: Any = None
@@ -126,7 +129,7 @@ class Engine:
         self.counters = {"sim_losses": 0, "reconnects": 0, "stalls": 0}
         self._stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self._stopping = threading.Event()
-        self._status = StatusPublisher(node_name)
+        self._status = StatusPublisher(self.ros, node_name)
         self._threads = [
             threading.Thread(target=self._watchdog_loop, name="watchdog", daemon=True),
             threading.Thread(target=self._scene_loop, name="scene-loader", daemon=True),
@@ -259,7 +262,7 @@ class Engine:
         if self._client_factory is not None:
             raise EngineError(f"{what}: the simulator connection is lost; the node is reconnecting")
         self.sim.stop_loop()  # the mission script's client: its owner says it works again
-        self._swap_link(SimLink(self.client), self.client, self.world)
+        self._swap_link(self._link(self.client), self.client, self.world)
 
     def _swap_link(self, link: SimLink, client: Any, world: Any) -> None:
         self.client, self.sim, self.services.sim, self.world = client, link, link, world
@@ -357,7 +360,7 @@ class Engine:
             return str(exc)
         start = time.monotonic()
         scene = self.scene
-        link = SimLink(client)  # first, so the scene load already uses the link's receive loop
+        link = self._link(client)  # first, so the scene load already uses the link's receive loop
         guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
         guard.start()
         try:

@@ -1,4 +1,5 @@
-"""The ROS side of the engine: message classes, publishers with peer listeners, batched tf."""
+"""The ROS side of the engine: message classes, the ROS link (publishers with peer listeners,
+subscribers, services, the clock) and batched tf."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from typing import Any
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
+
+ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
 class RosTypeError(LookupError):
@@ -56,6 +59,50 @@ class TfBroadcaster:
             if self._broadcaster is None:
                 self._broadcaster = tf2_ros.TransformBroadcaster()
             self._broadcaster.sendTransform(transforms)
+
+
+class RosLink:
+    """Every ROS endpoint the runners make, and tf: the engine's one door to rospy for bridges.
+
+    As the sim link owns the client, this owns the node's side. Runners use only these methods, so unit
+    tests give them a fake (tests/engine/fakes.py) and run without a master.
+    """
+
+    def __init__(self) -> None:
+        self.tf = TfBroadcaster()
+
+    def publisher(
+        self,
+        name: str,
+        ros_type: str,
+        *,
+        queue_size: int,
+        latch: bool = False,
+        on_peers: Callable[[], None] | None = None,
+    ) -> Any:
+        """A publisher (`publish`, `get_num_connections`, `unregister`); `on_peers` runs whenever a
+        subscriber connects or leaves."""
+        listener = PeerListener(on_peers) if on_peers is not None else None
+        return rospy.Publisher(
+            name, message_class(ros_type), queue_size=queue_size, latch=latch, subscriber_listener=listener
+        )
+
+    def subscriber(
+        self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int
+    ) -> Any:
+        """A subscriber (`unregister`)."""
+        return rospy.Subscriber(name, message_class(ros_type), callback, queue_size=queue_size)
+
+    def service(self, name: str, srv_type: str, handler: Callable[[Any], Any]) -> tuple[Any, type]:
+        """A service (`shutdown`) and its response class."""
+        srv_class = message_class(srv_type, "srv")
+        return rospy.Service(name, srv_class, handler), srv_class._response_class
+
+    def now(self) -> Any:
+        return rospy.Time.now()
+
+    def send_tf(self, transforms: list[TransformStamped]) -> None:
+        self.tf.send(transforms)
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:

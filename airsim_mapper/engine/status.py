@@ -27,13 +27,12 @@ def status_topic(node_name: str) -> str:
 class StatusPublisher:
     """Publishes status dicts as JSON; skips nothing, so subscribers see every change."""
 
-    def __init__(self, node_name: str) -> None:
-        import rospy
+    def __init__(self, ros: Any, node_name: str) -> None:
         from std_msgs.msg import String
 
         self._string = String
         self._lock = threading.Lock()
-        self.publisher = rospy.Publisher(status_topic(node_name), String, queue_size=2, latch=True)
+        self.publisher = ros.publisher(status_topic(node_name), "std_msgs/String", queue_size=2, latch=True)
 
     def publish(self, status: dict[str, Any]) -> None:
         text = json.dumps(status, sort_keys=True)
