@@ -27,7 +27,7 @@ from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
@@ -118,9 +118,10 @@ class ProjectAirSimWrapper:
     def scene(self) -> Scene | None:
         return self.engine.scene
 
-    def load_scene(self, scene_file: str) -> Scene:
-        """Load a scene file from `sim_config_path` into the simulator and bridge it."""
-        return self.engine.load_scene(scene_file)
+    def load_scene(self, scene_file: str | Scene, specs: tuple[BridgeSpec, ...] | None = None) -> Scene:
+        """Load a scene file from `sim_config_path` into the simulator and bridge it (or a Scene already
+        read, with its bridges already expanded for this node: see Engine.load_scene)."""
+        return self.engine.load_scene(scene_file, specs)
 
     def update_topics(self, world: Any = None) -> None:
         """Re-bridge after a mission script loaded a scene with `World(...)` on the shared client.

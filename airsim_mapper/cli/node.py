@@ -129,10 +129,12 @@ def main(argv: list[str] | None = None) -> int:
     from airsim_mapper.scene import read_scene
 
     node_name = args.nodename or "projectairsim"
+    scene, specs = None, None
     try:
         mapping = load_mapping(args.mapping)
-        if args.scene:
-            expand(mapping, read_scene(args.simconfigpath, args.scene), node_name, args.namespace)
+        if args.scene:  # read and expanded once, before anything connects
+            scene = read_scene(args.simconfigpath, args.scene)
+            specs = expand(mapping, scene, node_name, args.namespace)
     except ConfigError as exc:
         print(str(exc), file=sys.stderr)
         return 1
@@ -170,8 +172,10 @@ def main(argv: list[str] | None = None) -> int:
         tune_process=True,  # this process is the bridge's own
     )
     try:
-        if args.scene:
-            wrapper.load_scene(args.scene)
+        if scene is not None:
+            # An anonymous node's name is known only now: its bridges are expanded again for it.
+            same_name = wrapper.engine.node_name == node_name
+            wrapper.load_scene(scene, specs if same_name else None)
     except ConfigError as exc:
         print(str(exc), file=sys.stderr)
         rospy.signal_shutdown("invalid scene")

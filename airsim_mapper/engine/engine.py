@@ -143,9 +143,10 @@ class Engine:
     def specs_for(self, scene: Scene) -> tuple[BridgeSpec, ...]:
         return expand(self.mapping, scene, self.node_name, self.namespace)
 
-    def apply(self, scene: Scene) -> tuple[BridgeSpec, ...]:
-        """Run exactly the bridges of `scene`: stop the old scene's, start the new ones."""
-        specs = self.specs_for(scene)
+    def apply(self, scene: Scene, specs: tuple[BridgeSpec, ...] | None = None) -> tuple[BridgeSpec, ...]:
+        """Run exactly the bridges of `scene` (its `specs`, when already expanded): stop the old scene's,
+        start the new ones."""
+        specs = self.specs_for(scene) if specs is None else specs
         with self._lock:
             self._stop_scene_bridges(keep={s.name: s for s in specs})
             if self._freeze_heap:
@@ -177,10 +178,18 @@ class Engine:
             del self.bridges[name]
 
     # --- scenes -----------------------------------------------------------------------------
-    def load_scene(self, scene_file: str) -> Scene:
-        """Validate, load into the simulator, and re-bridge. On any error the current scene stays."""
-        scene = read_scene(self.sim_config_path, scene_file)  # path and config checks first
-        self.specs_for(scene)  # the mapping must expand for it before anything is torn down
+    def load_scene(self, scene_file: str | Scene, specs: tuple[BridgeSpec, ...] | None = None) -> Scene:
+        """Validate, load into the simulator, and re-bridge. On any error the current scene stays.
+
+        A Scene already read (and its specs, expanded for this engine's node name and namespace) is used
+        as it is: the node reads and expands once at start-up and hands the result on.
+        """
+        if isinstance(scene_file, Scene):
+            scene, scene_file = scene_file, scene_file.file
+        else:
+            scene = read_scene(self.sim_config_path, scene_file)  # path and config checks first
+        # The mapping must expand for the scene before anything is torn down.
+        specs = self.specs_for(scene) if specs is None else specs
         with self._lock:
             self._require_link(f"load_scene {scene_file}")
             self._stop_scene_bridges(keep={})
@@ -193,7 +202,7 @@ class Engine:
                     log.error("loading %s failed; restoring the bridges of %s", scene_file, self.scene.file)
                     self.apply(self.scene)
                 raise
-            self.apply(scene)
+            self.apply(scene, specs)
         log.info("scene %s (%s) loaded: %d bridges", scene.name, scene_file, len(self.bridges))
         return scene
 

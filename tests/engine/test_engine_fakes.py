@@ -120,3 +120,20 @@ def test_shutdown_stops_every_bridge_and_says_so():
     assert rig.engine.bridges == {} and rig.links[0].closed
     assert all(p.unregistered for p in publishers)
     assert rig.statuses()[-1]["state"] == STOPPED
+
+
+def test_a_scene_read_and_expanded_at_start_up_is_loaded_without_reading_or_expanding_again(rig, monkeypatch):
+    from airsim_mapper.engine import engine as engine_module
+    from airsim_mapper.mapping.expand import expand
+    from airsim_mapper.scene import read_scene
+
+    scene = read_scene(SIM_CONFIG, SCENE)
+    specs = expand(rig.engine.mapping, scene, "node", "")
+
+    def again(*_args, **_kwargs):
+        raise AssertionError("read or expanded again")
+
+    monkeypatch.setattr(engine_module, "read_scene", again)
+    monkeypatch.setattr(engine_module, "expand", again)
+    assert rig.engine.load_scene(scene, specs) is scene
+    assert set(rig.engine.bridges) == {spec.name for spec in specs}
