@@ -9,8 +9,11 @@ Contract of an implementation (see registry.py):
 - ros_to_sim: ``fn(ros_msg, ctx: ConvertContext) -> dict`` (sim topic message or service params)
 Converters raise ``ConversionError`` (airsim_mapper.convert.errors) for malformed input, nothing else.
 
-`markdown_table` renders the catalogue for people: `airsim-mapper converters` prints it, and the README's
-converter table is that output (a test keeps the two equal).
+Each entry also says how the engine runs the converter (`runner`, engine/bridges.py) and what follows a
+successful simulator call (`after`), so the engine never tests converter names.
+
+`markdown_table` renders the catalogue for people: `airsim-mapper converters` prints it, and
+`docs/converters.md` is that output (a test keeps the two equal).
 """
 
 from __future__ import annotations
