@@ -32,6 +32,7 @@ log = logging.getLogger("rosout.airsim_mapper.node")
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
     from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S
+    from airsim_mapper.engine.sim_link import MAX_FRAME_MB
     from airsim_mapper.resources import DEFAULT_MAPPING, shipped_mappings
 
     parser = argparse.ArgumentParser(prog="projectairsim_node.py", description=__doc__.splitlines()[0])
@@ -57,9 +58,17 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         default=SHUTDOWN_TIMEOUT_S,
         help=f"seconds a SIGINT/SIGTERM may take to stop the node (default {SHUTDOWN_TIMEOUT_S:g})",
     )
+    parser.add_argument(
+        "--max-frame-mb",
+        type=float,
+        default=MAX_FRAME_MB,
+        help=f"larger simulator frames are dropped, counted as oversized_frames (default {MAX_FRAME_MB:g})",
+    )
     args = parser.parse_args(argv)
     if not args.shutdown_timeout > 0:
         parser.error(f"--shutdown-timeout must be positive, got {args.shutdown_timeout}")
+    if not 0 < args.max_frame_mb < float("inf"):
+        parser.error(f"--max-frame-mb must be a positive number, got {args.max_frame_mb}")
     return args
 
 
@@ -167,6 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_on_shutdown=True,  # this node made the client
         client_factory=partial(open_client, args.address, args.topicsport, args.servicesport),
         shutdown_timeout=max(0.5, args.shutdown_timeout - 1.5),  # rospy's own unregistering comes after
+        max_frame_mb=args.max_frame_mb,
     )
     try:
         if args.scene:

@@ -6,7 +6,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, MutableMapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import rospy
@@ -14,10 +14,10 @@ import rospy
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
-from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
-from airsim_mapper.engine.sim_link import SimLink, SimLinkError
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
 from airsim_mapper.mapping.model import SIM_TO_ROS, BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
@@ -61,6 +61,7 @@ class Services:
     tf: TfBroadcaster
     shared: MutableMapping[Any, Any]
     node_action: Callable[[BridgeSpec, dict], Any]  # load_scene and other engine-level actions
+    counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
 
 
 def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
@@ -157,6 +158,8 @@ class SimToRos(Bridge):
         try:
             out = self.convert(message, self.ctx)
         except ConversionError as exc:
+            if isinstance(exc, OversizedData):
+                self.services.counts.oversized += 1
             self.fail(f"dropped a message from {self.topic}: {exc}")
             return None
         if out is None:

@@ -86,6 +86,7 @@ class Diagnostics:
         state = getattr(self.engine, "state", "connected")
         reason = getattr(self.engine, "reason", "")
         scene = self.engine.scene
+        counts = getattr(self.engine, "frame_counts", None)
         level = OK if state == "connected" else ERROR
         return {
             "name": f"{self.prefix}simulator",
@@ -96,6 +97,10 @@ class Diagnostics:
                 "scene": scene.name if scene else "",
                 "scene_file": scene.file if scene else "",
                 "bridges": str(len(self.engine.bridges)),
+                **{
+                    key: str(getattr(counts, attr, 0))
+                    for key, attr in (("bad_frames", "bad"), ("oversized_frames", "oversized"))
+                },
             },
         }
 

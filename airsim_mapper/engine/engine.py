@@ -36,7 +36,7 @@ from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, Healt
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import TfBroadcaster
-from airsim_mapper.engine.sim_link import SimLink, close_client
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
@@ -94,6 +94,7 @@ class Engine:
         namespace: str = "",
         load_world: Callable[[Any, Scene, str], Any] | None = None,
         client_factory: Callable[[], Any] | None = None,
+        frame_counts: FrameCounts | None = None,
     ) -> None:
         tune_process()
         self.gc_pauses = GcPauses()
@@ -103,11 +104,14 @@ class Engine:
         self.sim_config_path = str(sim_config_path)
         self.node_name = node_name
         self.namespace = namespace
-        self.sim = SimLink(client)
+        self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
+        self.sim = SimLink(client, self.frame_counts)
         self.tf = TfBroadcaster()
         self.hub = StreamHub(self.sim, self.tf.send)
         self.shared: dict[Any, Any] = {}
-        self.services = Services(self.sim, self.hub, self.tf, self.shared, self._node_action)
+        self.services = Services(
+            self.sim, self.hub, self.tf, self.shared, self._node_action, self.frame_counts
+        )
         self.bridges: dict[str, Bridge] = {}
         self.scene: Scene | None = None
         self.world: Any = None
@@ -256,7 +260,7 @@ class Engine:
         if self._client_factory is not None:
             raise EngineError(f"{what}: the simulator connection is lost; the node is reconnecting")
         self.sim.stop_loop()  # the mission script's client: its owner says it works again
-        self._swap_link(SimLink(self.client), self.client, self.world)
+        self._swap_link(SimLink(self.client, self.frame_counts), self.client, self.world)
 
     def _swap_link(self, link: SimLink, client: Any, world: Any) -> None:
         self.client, self.sim, self.services.sim, self.world = client, link, link, world
@@ -354,7 +358,9 @@ class Engine:
             return str(exc)
         start = time.monotonic()
         scene = self.scene
-        link = SimLink(client)  # first, so the scene load already uses the link's receive loop
+        link = SimLink(
+            client, self.frame_counts
+        )  # first, so the scene load already uses the link's receive loop
         guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
         guard.start()
         try:
@@ -403,7 +409,8 @@ class Engine:
             "reason": self.reason,
             "scene": self.scene.file if self.scene else None,
             **self.counters,
-            "bad_frames": self.sim.bad_frames,
+            "bad_frames": self.frame_counts.bad,
+            "oversized_frames": self.frame_counts.oversized,
             "gc_max_ms": self.gc_pauses.take_peak_ms(),
             "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
             "streams": streams,
