@@ -33,12 +33,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.fast_frames import decode_map
+from airsim_mapper.engine.health import PROBE_METHOD
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
-PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 WARN_PERIOD_S = 5.0
 MAX_FRAME_MB = 64.0  # default cap on one simulator frame (a 4K BGR image is 25 MB)
 MESSAGE_FRAME = 2  # projectairsim.types.FrameType.MESSAGE: the only type a server sends to a client
