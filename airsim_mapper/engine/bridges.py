@@ -18,6 +18,7 @@ from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
+from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.mapping.model import SIM_TO_ROS, BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
@@ -62,6 +63,7 @@ class Services:
     shared: MutableMapping[Any, Any]
     node_action: Callable[[BridgeSpec, dict], Any]  # load_scene and other engine-level actions
     counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
+    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # /clock going backwards
 
 
 def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
@@ -113,6 +115,7 @@ class SimToRos(Bridge):
         self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
         self._last_publish = -1e9
         self.topic = spec.sim
+        self._is_clock = spec.ros_type == "rosgraph_msgs/Clock"  # what /use_sim_time nodes follow
 
     @property
     def lazy(self) -> bool:
@@ -174,6 +177,8 @@ class SimToRos(Bridge):
                 return None
         self.stats.messages += 1
         self.stats.last_time = now
+        if self._is_clock:
+            self.services.sim_time.observe(out.clock.to_nsec(), now)
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp

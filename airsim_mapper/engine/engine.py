@@ -31,12 +31,13 @@ from pathlib import Path
 from typing import Any
 
 from airsim_mapper.convert.command import shorten
-from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
+from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, Throttled, build
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import TfBroadcaster
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
+from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
@@ -109,8 +110,9 @@ class Engine:
         self.tf = TfBroadcaster()
         self.hub = StreamHub(self.sim, self.tf.send)
         self.shared: dict[Any, Any] = {}
+        self.sim_time = SimTimeWatch(warn=Throttled("sim time").warn)
         self.services = Services(
-            self.sim, self.hub, self.tf, self.shared, self._node_action, self.frame_counts
+            self.sim, self.hub, self.tf, self.shared, self._node_action, self.frame_counts, self.sim_time
         )
         self.bridges: dict[str, Bridge] = {}
         self.scene: Scene | None = None
@@ -411,6 +413,8 @@ class Engine:
             **self.counters,
             "bad_frames": self.frame_counts.bad,
             "oversized_frames": self.frame_counts.oversized,
+            "sim_time_jumps_back": self.sim_time.jumps_back,
+            "sim_time_last_jump_back_s": round(self.sim_time.last_jump_s, 3),
             "gc_max_ms": self.gc_pauses.take_peak_ms(),
             "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
             "streams": streams,
