@@ -25,7 +25,7 @@ from airsim_mapper.engine.diagnostics import Diagnostics
 from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
 from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
-from airsim_mapper.engine.sim_link import close_client
+from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.resources import DEFAULT_MAPPING
@@ -79,6 +79,7 @@ class ProjectAirSimWrapper:
         client_factory: Callable[[], Any] | None = None,
         shutdown_timeout: float = SHUTDOWN_TIMEOUT_S,
         tune_process: bool = False,
+        max_frame_mb: float = MAX_FRAME_MB,
     ) -> None:
         redirect_client_log()
         self.shutdown_timeout = shutdown_timeout
@@ -97,6 +98,7 @@ class ProjectAirSimWrapper:
             namespace,
             client_factory=client_factory,
             tune=tune_process,
+            frame_counts=FrameCounts(max_frame_bytes=int(max_frame_mb * 1024 * 1024)),
         )
         self.master_watch = MasterWatch()
         self.diagnostics = Diagnostics(self.engine, name)

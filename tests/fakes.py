@@ -27,6 +27,7 @@ class FakeSim:
     """The simulator link: every call answers `result`; topics are delivered by `deliver`."""
 
     client: Any = None
+    counts: Any = None  # the engine's FrameCounts
     result: Any = True
     answering: bool = True  # probes are answered
     dropped: bool = False  # the connection dropped

@@ -6,6 +6,10 @@ stops the node with the validate-mapping errors and exit code 1, before anything
 that is not running yet is waited for (one log line per attempt; backoff 0.5 s, then 2 s, then 5 s); one
 that restarts later is reconnected to and the last scene reloaded, without restarting the node.
 
+A port that accepts the connection but never answers is not waited for: after about 10 s the node
+exits with status 1 and says so. Start-up (connecting, loading the scene) runs on a thread of its own, so
+the main thread always sees a signal.
+
 SIGINT or SIGTERM stops the node within --shutdown-timeout seconds whatever the simulator does (past
 that it exits with status 1 and says so); a second signal exits at once.
 """
@@ -21,17 +25,23 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from airsim_mapper.engine.health import Backoff, SimUnreachable, open_client
+from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
 from airsim_mapper.mapping.errors import ConfigError
+
+if TYPE_CHECKING:
+    from airsim_mapper.mapping.model import BridgeSpec
+    from airsim_mapper.scene import Scene
 
 log = logging.getLogger("rosout.airsim_mapper.node")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
     from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S
+    from airsim_mapper.engine.sim_link import MAX_FRAME_MB
     from airsim_mapper.resources import DEFAULT_MAPPING, shipped_mappings
 
     parser = argparse.ArgumentParser(prog="projectairsim_node.py", description=__doc__.splitlines()[0])
@@ -57,9 +67,17 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         default=SHUTDOWN_TIMEOUT_S,
         help=f"seconds a SIGINT/SIGTERM may take to stop the node (default {SHUTDOWN_TIMEOUT_S:g})",
     )
+    parser.add_argument(
+        "--max-frame-mb",
+        type=float,
+        default=MAX_FRAME_MB,
+        help=f"larger simulator frames are dropped, counted as oversized_frames (default {MAX_FRAME_MB:g})",
+    )
     args = parser.parse_args(argv)
     if not args.shutdown_timeout > 0:
         parser.error(f"--shutdown-timeout must be positive, got {args.shutdown_timeout}")
+    if not 0 < args.max_frame_mb < float("inf"):
+        parser.error(f"--max-frame-mb must be a positive number, got {args.max_frame_mb}")
     return args
 
 
@@ -100,14 +118,15 @@ def connect(
     is_shutdown: Callable[[], bool],
     sleep: Callable[[float], Any] | None = None,
 ) -> Any:
-    """Connect to the simulator, retrying with backoff until it answers or ROS shuts down (then None)."""
-    import time
-
+    """Connect to the simulator, retrying with backoff while nothing listens, until it answers or ROS shuts
+    down (then None). SimSilent (the ports are held but nothing answers) is raised, not retried."""
     sleep = sleep or time.sleep
     backoff = Backoff()
     while not is_shutdown():
         try:
             client = open_client(address, topicsport, servicesport)
+        except SimSilent:
+            raise
         except SimUnreachable as exc:
             delay = backoff.next_delay()
             log.warning("%s; waiting for it: attempt %d, next in %.1f s", exc, backoff.attempt, delay)
@@ -153,42 +172,90 @@ def main(argv: list[str] | None = None) -> int:
     def stopping() -> bool:
         return bool(stop) or rospy.is_shutdown()
 
-    from airsim_mapper.wrapper import ProjectAirSimWrapper, redirect_client_log
+    from airsim_mapper.wrapper import redirect_client_log
 
     redirect_client_log()
-    client = connect(args.address, args.topicsport, args.servicesport, stopping)
-    if client is None:
-        rospy.signal_shutdown("stopped while waiting for the simulator")
-        return 0
-    wrapper = ProjectAirSimWrapper(
-        client,
-        sim_config_path=args.simconfigpath,
-        mapping=mapping,
-        node_name=rospy.get_name().lstrip("/"),
-        namespace=args.namespace,
-        disconnect_on_shutdown=True,  # this node made the client
-        client_factory=partial(open_client, args.address, args.topicsport, args.servicesport),
-        shutdown_timeout=max(0.5, args.shutdown_timeout - 1.5),  # rospy's own unregistering comes after
-        tune_process=True,  # this process is the bridge's own
-    )
-    try:
-        if scene is not None:
-            # An anonymous node's name is known only now: its bridges are expanded again for it.
-            same_name = wrapper.engine.node_name == node_name
-            wrapper.load_scene(scene, specs if same_name else None)
-    except ConfigError as exc:
-        print(str(exc), file=sys.stderr)
-        rospy.signal_shutdown("invalid scene")
+    startup = StartUp(args, mapping, stopping, Prepared(node_name, scene, specs))
+    worker = threading.Thread(target=startup.run, name="start-up", daemon=True)
+    worker.start()
+    while not stopping() and worker.is_alive():
+        time.sleep(0.1)
+    if startup.failure and not stopping():
+        print(startup.failure, file=sys.stderr)
+        rospy.signal_shutdown("start-up failed")
         return 1
-    except Exception as exc:  # the simulator refused the scene: say why, without a traceback
-        print(f"{args.scene}: the simulator could not load it: {type(exc).__name__}: {exc}", file=sys.stderr)
-        rospy.signal_shutdown("scene not loaded")
-        return 1
-    log.info("bridges:\n%s", format_table(wrapper.bridges))
+    if startup.wrapper is not None:
+        log.info("bridges:\n%s", format_table(startup.wrapper.bridges))
     while not stopping():
         time.sleep(0.1)
     rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")
     return 0
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """The start scene as read and expanded (for `node_name`) before anything connected."""
+
+    node_name: str
+    scene: Scene | None = None
+    specs: tuple[BridgeSpec, ...] | None = None
+
+
+class StartUp:
+    """The node's start-up on a thread of its own: connect, make the wrapper, load the start scene.
+
+    The main thread only waits for it, so a signal is seen at once even while a connect or a scene load
+    is blocked in the simulator client. `failure` is the message to print (exit status 1)."""
+
+    def __init__(
+        self, args: argparse.Namespace, mapping: Any, stopping: Callable[[], bool], prepared: Prepared
+    ) -> None:
+        self.args, self.mapping, self.stopping, self.prepared = args, mapping, stopping, prepared
+        self.wrapper: Any = None
+        self.failure = ""
+
+    def run(self) -> None:
+        try:
+            self.failure = self._run()
+        except Exception as exc:  # never leave the main thread waiting: say what happened
+            self.failure = f"start-up failed: {type(exc).__name__}: {exc}"
+
+    def _run(self) -> str:
+        import rospy
+
+        from airsim_mapper.wrapper import ProjectAirSimWrapper
+
+        args = self.args
+        try:
+            client = connect(args.address, args.topicsport, args.servicesport, self.stopping)
+        except SimSilent as exc:
+            return str(exc)
+        if client is None:
+            return ""  # stopped while waiting for the simulator
+        self.wrapper = ProjectAirSimWrapper(
+            client,
+            sim_config_path=args.simconfigpath,
+            mapping=self.mapping,
+            node_name=rospy.get_name().lstrip("/"),
+            namespace=args.namespace,
+            disconnect_on_shutdown=True,  # this node made the client
+            client_factory=partial(open_client, args.address, args.topicsport, args.servicesport),
+            shutdown_timeout=max(0.5, args.shutdown_timeout - 1.5),  # rospy's own unregistering comes after
+            max_frame_mb=args.max_frame_mb,
+            tune_process=True,  # this process is the bridge's own
+        )
+        prepared = self.prepared
+        if prepared.scene is None:
+            return ""
+        try:
+            # An anonymous node's name is known only now: its bridges are expanded again for it.
+            same_name = self.wrapper.engine.node_name == prepared.node_name
+            self.wrapper.load_scene(prepared.scene, prepared.specs if same_name else None)
+        except ConfigError as exc:
+            return str(exc)
+        except Exception as exc:  # the simulator refused the scene: say why, without a traceback
+            return f"{args.scene}: the simulator could not load it: {type(exc).__name__}: {exc}"
+        return ""
 
 
 def run() -> None:

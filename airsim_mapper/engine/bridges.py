@@ -17,10 +17,11 @@ from typing import Any
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
-from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
-from airsim_mapper.engine.sim_link import SimLink, SimLinkError
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
+from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.mapping.model import BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
@@ -65,6 +66,8 @@ class Services:
     shared: MutableMapping[Any, Any]
     node_action: Callable[[str, dict], Any]  # an engine action by its catalogue name (load_scene)
     streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
+    counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
+    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # /clock going backwards
 
 
 def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
@@ -122,6 +125,7 @@ class SimToRos(Bridge):
         self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
         self._last_publish = -1e9
         self.topic = spec.sim
+        self._is_clock = spec.ros_type == "rosgraph_msgs/Clock"  # what /use_sim_time nodes follow
 
     @property
     def lazy(self) -> bool:
@@ -167,6 +171,8 @@ class SimToRos(Bridge):
         try:
             out = self.convert(message, self.ctx)
         except ConversionError as exc:
+            if isinstance(exc, OversizedData):
+                self.services.counts.oversized += 1
             self.fail(f"dropped a message from {self.topic}: {exc}")
             return None
         if out is None:
@@ -181,6 +187,8 @@ class SimToRos(Bridge):
                 return None
         self.stats.messages += 1
         self.stats.last_time = now
+        if self._is_clock:
+            self.services.sim_time.observe(out.clock.to_nsec(), now)
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp

@@ -31,12 +31,13 @@ from pathlib import Path
 from typing import Any
 
 from airsim_mapper.convert.command import shorten
-from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, build
+from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, Throttled, build
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import RosLink
-from airsim_mapper.engine.sim_link import SimLink, close_client
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
+from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
@@ -96,7 +97,8 @@ class Engine:
         client_factory: Callable[[], Any] | None = None,
         tune: bool = False,
         ros: RosLink | None = None,
-        link: Callable[[Any], SimLink] = SimLink,
+        link: Callable[[Any, FrameCounts], SimLink] = SimLink,
+        frame_counts: FrameCounts | None = None,
     ) -> None:
         if tune:
             tune_process()
@@ -108,12 +110,22 @@ class Engine:
         self.sim_config_path = str(sim_config_path)
         self.node_name = node_name
         self.namespace = namespace
+        self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
         self._link = link
-        self.sim = link(client)
+        self.sim = link(client, self.frame_counts)
         self.ros = ros or RosLink()
         self.hub = StreamHub(self.sim, self.ros.send_tf)
         self.shared: dict[Any, Any] = {}
-        self.services = Services(self.sim, self.hub, self.ros, self.shared, self._node_action)
+        self.sim_time = SimTimeWatch(warn=Throttled("sim time").warn)
+        self.services = Services(
+            self.sim,
+            self.hub,
+            self.ros,
+            self.shared,
+            self._node_action,
+            counts=self.frame_counts,
+            sim_time=self.sim_time,
+        )
         self.bridges: dict[str, Bridge] = {}
         self.scene: Scene | None = None
         self.world: Any = None
@@ -271,7 +283,7 @@ class Engine:
         if self._client_factory is not None:
             raise EngineError(f"{what}: the simulator connection is lost; the node is reconnecting")
         self.sim.stop_loop()  # the mission script's client: its owner says it works again
-        self._swap_link(self._link(self.client), self.client, self.world)
+        self._swap_link(self._link(self.client, self.frame_counts), self.client, self.world)
 
     def _swap_link(self, link: SimLink, client: Any, world: Any) -> None:
         self.client, self.sim, self.services.sim, self.world = client, link, link, world
@@ -369,7 +381,7 @@ class Engine:
             return str(exc)
         start = time.monotonic()
         scene = self.scene
-        link = self._link(client)  # first, so the scene load already uses the link's receive loop
+        link = self._link(client, self.frame_counts)  # first, so the scene load already uses its receive loop
         guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
         guard.start()
         try:
@@ -418,7 +430,10 @@ class Engine:
             "reason": self.reason,
             "scene": self.scene.file if self.scene else None,
             **self.counters,
-            "bad_frames": self.sim.bad_frames,
+            "bad_frames": self.frame_counts.bad,
+            "oversized_frames": self.frame_counts.oversized,
+            "sim_time_jumps_back": self.sim_time.jumps_back,
+            "sim_time_last_jump_back_s": round(self.sim_time.last_jump_s, 3),
             "gc_max_ms": self.gc_pauses.take_peak_ms(),
             "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
             "streams": streams,

@@ -9,8 +9,10 @@
 - Callbacks run on the client's receive thread; they must only hand messages over (see streams.py).
 - Receiving: the client's own receive loop decodes every frame element by element and ends for good on
   the first undecodable frame (or a failing callback). The bridge's loop (`receive`, the same dispatch)
-  replaces it whatever the order in which a mission script made `World` and the bridge: a malformed frame
-  is dropped, counted in `bad_frames` and reported at most every 5 s; large frames that only the bridge
+  replaces it whatever the order in which a mission script made `World` and the bridge: a malformed frame,
+  or one of a type other than MESSAGE, is dropped, counted in `bad_frames` and reported at most every 5 s;
+  a frame over `FrameCounts.max_frame_bytes` is dropped before it is unpacked and counted in
+  `oversized_frames` (the engine keeps the counts across reconnects); large frames that only the bridge
   listens to skip msgpack's per-element lists; every other callback gets what the client would give it.
 - Liveness: the link notices when a connection drops (an NNG pipe removal on either socket: the server
   died or restarted) and offers a cheap `probe`. A link marked dead answers every call at once with
@@ -28,20 +30,32 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.fast_frames import decode_map
+from airsim_mapper.engine.health import PROBE_METHOD
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
-PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 WARN_PERIOD_S = 5.0
 RECEIVE_THREAD = "sim-receive"
 CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
 TAKE_OVER_WAIT_S = 1.0
 CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
+MAX_FRAME_MB = 64.0  # default cap on one simulator frame (a 4K BGR image is 25 MB)
+MESSAGE_FRAME = 2  # projectairsim.types.FrameType.MESSAGE: the only type a server sends to a client
+
+
+@dataclass
+class FrameCounts:
+    """Simulator frames the bridge refused, kept by the engine across reconnects (status, /diagnostics)."""
+
+    max_frame_bytes: int = int(MAX_FRAME_MB * 1024 * 1024)
+    bad: int = 0  # undecodable, of an unknown type, or a callback failed
+    oversized: int = 0  # over max_frame_bytes, or an image over its pixel bound
 
 
 class SimLinkError(RuntimeError):
@@ -58,8 +72,9 @@ class SimLinkDead(SimLinkError):
 class SimLink:
     """Reference-counted topic subscriptions and concurrent service calls on a shared client."""
 
-    def __init__(self, client: Any) -> None:
+    def __init__(self, client: Any, counts: FrameCounts | None = None) -> None:
         self.client = client
+        self.counts = counts or FrameCounts()
         self._lock = threading.RLock()
         self._ours: dict[str, list[TopicCallback]] = {}
         self._loop = asyncio.new_event_loop()
@@ -76,7 +91,6 @@ class SimLink:
         ]
         for sock in self._watched:
             sock.add_post_pipe_remove_cb(self._on_pipe_removed)
-        self.bad_frames = 0
         self.fast_frames = 0  # frames decoded on the fast path
         self._last_warning = -1e9
         self._unreported = 0
@@ -114,8 +128,18 @@ class SimLink:
         import msgpack
 
         client = self.client
+        if len(packed) > self.counts.max_frame_bytes:
+            self.counts.oversized += 1
+            self._warn(
+                f"a {len(packed) / 1048576:.1f} MB frame dropped: over the "
+                f"{self.counts.max_frame_bytes / 1048576:g} MB limit (--max-frame-mb)"
+            )
+            return
         try:
             frame = msgpack.unpackb(packed, raw=True)
+            if frame[0] != MESSAGE_FRAME:
+                self._bad_frame(f"frame of unknown type {frame[0]!r} dropped (only MESSAGE is expected)")
+                return
             topic = frame[1].decode("utf-8")
             entry = client.subs.get(topic)
             if entry is None:
@@ -140,8 +164,16 @@ class SimLink:
         ours = self._ours.get(topic, ())
         return bool(callbacks) and all(cb in ours for cb in callbacks)
 
+    @property
+    def bad_frames(self) -> int:
+        return self.counts.bad
+
     def _bad_frame(self, message: str) -> None:
-        self.bad_frames += 1
+        self.counts.bad += 1
+        self._warn(message)
+
+    def _warn(self, message: str) -> None:
+        """Log a dropped frame at most once per WARN_PERIOD_S, with a count of those held back."""
         now = time.monotonic()
         if now - self._last_warning < WARN_PERIOD_S:
             self._unreported += 1

@@ -36,8 +36,8 @@ class Rig:
             link=self._link,
         )
 
-    def _link(self, client) -> FakeSim:
-        self.links.append(FakeSim(client))
+    def _link(self, client, counts) -> FakeSim:
+        self.links.append(FakeSim(client, counts))
         return self.links[-1]
 
     def _load_world(self, client, scene, _path) -> str:
