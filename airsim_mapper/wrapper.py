@@ -1,7 +1,8 @@
 """ProjectAirSimWrapper: the bridge as an object a mission script embeds (the public API that the Project
 AirSim ROS bridge documentation describes).
 
-Call `rospy.init_node` first. The wrapper either creates its own client (kept in `projectairsim_client`
+Call `rospy.init_node` first. Without a scene the wrapper runs the node's own bridges (load_scene) and
+waits for one. The wrapper either creates its own client (kept in `projectairsim_client`
 and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
 a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow.
 
@@ -89,6 +90,7 @@ class ProjectAirSimWrapper:
         self.diagnostics = Diagnostics(self.engine, name)
         self._closed = False
         rospy.on_shutdown(self.shutdown)
+        self.engine.start_node_bridges()  # load_scene is there before (and without) any scene
         if scene:
             self.engine.load_scene(scene)
 

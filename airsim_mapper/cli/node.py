@@ -180,6 +180,10 @@ def main(argv: list[str] | None = None) -> int:
         rospy.signal_shutdown("scene not loaded")
         return 1
     log.info("bridges:\n%s", format_table(wrapper.bridges))
+    if not args.scene:
+        topics = [b.ros for b in wrapper.bridges if b.converter == "load_scene"]
+        waiting_on = " or ".join(topics) or "(the mapping has no load_scene rule)"
+        log.info("no --scene: waiting for a scene file name on %s", waiting_on)
     while not stopping():
         time.sleep(0.1)
     rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")

@@ -16,6 +16,7 @@ from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.replays import LatchedReplays, connection_header
 from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
 from airsim_mapper.engine.sim_link import SimLink, SimLinkError
 from airsim_mapper.mapping.model import SIM_TO_ROS, BridgeSpec
@@ -208,6 +209,9 @@ class RosToSim(Bridge):
         self.last_message = 0.0
         self.moving = False  # a command was sent since the last watchdog stop
         self.pending: Any = None
+        # An engine action (load_scene) acts once per message: a latched message replayed on a new
+        # connection is ignored.
+        self.replays = LatchedReplays() if spec.sim_kind not in ("topic", "service") else None
 
     def start(self) -> None:
         self.subscriber = rospy.Subscriber(
@@ -218,6 +222,13 @@ class RosToSim(Bridge):
         )
 
     def on_message(self, ros_msg: Any) -> None:
+        if self.replays is not None and self.replays.is_replay(connection_header(ros_msg), _payload(ros_msg)):
+            log.info(
+                "%s: ignored the latched message %s replayed it on a new connection",
+                self.spec.name,
+                connection_header(ros_msg).get("callerid", "a publisher"),
+            )
+            return
         try:
             params = self.convert(ros_msg, self.ctx)
             require_finite(params)
@@ -339,6 +350,14 @@ class RosService(Bridge):
     def stop(self) -> None:
         if self.service is not None:
             self.service.shutdown()
+
+
+def _payload(ros_msg: Any) -> Any:
+    """A hashable value of a message's fields (for telling a replay from a new message)."""
+    try:
+        return tuple(repr(getattr(ros_msg, slot)) for slot in ros_msg.__slots__)
+    except AttributeError:
+        return repr(ros_msg)
 
 
 def _fill(response: Any, success: bool, message: str) -> Any:

@@ -1,8 +1,9 @@
 """The engine: runs the bridges of a mapping for the current scene, and follows scene changes.
 
 Data flows one way: scene + mapping --expand--> BridgeSpecs --build--> runners wired to the sim link and
-the ROS link. A scene change tears the scene's runners down and builds the new scene's; bridges that do
-not depend on the scene (load_scene itself) keep running.
+the ROS link. The node's own bridges (load_scene) start before any scene (`start_node_bridges`) and keep
+running, untouched, across scene changes; a scene change tears the scene's runners down and builds the new
+scene's.
 
 Simulator loss (health.py decides; only a closed connection is a loss): the link is abandoned at once
 (its calls fail fast, its sockets are closed so a restarted server's single topics connection is free),
@@ -134,10 +135,21 @@ class Engine:
             thread.start()
 
     # --- building ---------------------------------------------------------------------------
-    def specs_for(self, scene: Scene) -> tuple[BridgeSpec, ...]:
+    def specs_for(self, scene: Scene | None) -> tuple[BridgeSpec, ...]:
+        """The bridges of `scene`, or the node's own (load_scene) without one."""
         return expand(self.mapping, scene, self.node_name, self.namespace)
 
-    def apply(self, scene: Scene) -> tuple[BridgeSpec, ...]:
+    def node_specs(self) -> dict[str, BridgeSpec]:
+        return {spec.name: spec for spec in self.specs_for(None)}
+
+    def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
+        """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
+        with self._lock:
+            if self.scene is not None:
+                return tuple(b.spec for b in self.bridges.values())
+            return self.apply(None)
+
+    def apply(self, scene: Scene | None) -> tuple[BridgeSpec, ...]:
         """Run exactly the bridges of `scene`: stop the old scene's, start the new ones."""
         specs = self.specs_for(scene)
         with self._lock:
@@ -178,7 +190,7 @@ class Engine:
         self.specs_for(scene)  # the mapping must expand for it before anything is torn down
         with self._lock:
             self._require_link(f"load_scene {scene_file}")
-            self._stop_scene_bridges(keep={})
+            self._stop_scene_bridges(keep=self.node_specs())
             self.hub.drop_all()
             self.sim.forget_all()
             try:
@@ -196,7 +208,7 @@ class Engine:
         """A mission script loaded `scene` itself: its load cleared every subscription, so re-bridge."""
         with self._lock:
             self._require_link("adopt")
-            self._stop_scene_bridges(keep={})
+            self._stop_scene_bridges(keep=self.node_specs())
             self.hub.drop_all()
             self.sim.forget_all()
             self.world = world
