@@ -29,6 +29,7 @@ from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
@@ -82,7 +83,10 @@ class ProjectAirSimWrapper:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
             client = client_factory()
         self.sim_config_path = str(sim_config_path)
-        name = node_name if node_name is not None else rospy.get_name().lstrip("/")
+        name = node_name if node_name is not None else rospy.get_name().rsplit("/", 1)[-1]
+        # As a ROS name: "sim1" below the node's namespace (ROS_NAMESPACE, <group ns>, __ns:=); "/sim1" as is
+        namespace = resolve_namespace(namespace, rospy.get_namespace())
+        self.namespace = namespace
         self.engine = Engine(
             client, self.mapping, self.sim_config_path, name, namespace, client_factory=client_factory
         )

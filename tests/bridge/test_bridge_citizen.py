@@ -58,3 +58,91 @@ def test_start_without_a_scene_then_load_one_once_per_request(rig_factory):
     assert loads(node, TWO) == 2
     assert node.alive()
     node.stop()
+
+
+def lookup(parent: str, child: str, timeout: float = 20.0):
+    import rospy
+    import tf2_ros
+
+    buffer = tf2_ros.Buffer()
+    listener = tf2_ros.TransformListener(buffer)
+    try:
+        return buffer.lookup_transform(parent, child, rospy.Time(0), rospy.Duration(timeout))
+    finally:
+        listener.unregister()
+
+
+def test_rosrun_from_home_in_ros_namespace_with_private_params(rig_factory, tmp_path):
+    """rosrun from a directory without sim_config/, under ROS_NAMESPACE, configured by `_param:=` only."""
+    rig = rig_factory()
+    ports = rig.sim.ports
+    node = rig.launcher.start(
+        "rosrun_ns",
+        [
+            "rosrun",
+            "projectairsim_ros",
+            "projectairsim_node.py",
+            "__name:=ns_bridge",
+            f"_topicsport:={ports.topics}",
+            f"_servicesport:={ports.services}",
+            "_scene:=scene_drone_sensors.jsonc",
+            "_mapping:=enu",
+        ],
+        env={"ROS_NAMESPACE": "sim1"},
+        cwd=tmp_path,
+    )
+    wait_topic("/sim1/airsim_node/Drone1/actual_pose", node)
+    out = node.output()
+    assert "setting scene = 'scene_drone_sensors.jsonc' (parameter ~scene)" in out
+    assert "setting mapping = 'enu' (parameter ~mapping)" in out
+    assert "setting simconfigpath = " in out and "does not exist here, so the package's own" in out
+    assert subscribed("/sim1/ProjectAirSim/node/ns_bridge/load_scene")
+    lookup("sim1/map", "sim1/Drone1/base_link")  # the ENU mapping's frames, prefixed
+    node.stop()
+
+
+def test_ns_remap_and_command_line_over_parameter(rig_factory):
+    """`__ns:=` plus a relative --namespace nests; --scene on the command line wins over `_scene:=`."""
+    rig = rig_factory()
+    node = rig.start_node(
+        "__ns:=fleet",
+        "--namespace",
+        "sim2",
+        "--scene",
+        TWO,
+        "_scene:=scene_drone_sensors.jsonc",
+        node_name="nested_bridge",
+    )
+    wait_topic("/fleet/sim2/airsim_node/Drone2/actual_pose", node)
+    assert "setting scene = 'scene_two_drones.jsonc' (command line)" in node.output()
+    assert "setting namespace = 'sim2' (command line)" in node.output()
+    lookup("fleet/sim2/map", "fleet/sim2/airsim_node/Drone2")
+    node.stop()
+
+
+LAUNCH = """<launch>
+  <group ns="fleet">
+    <include file="$(find projectairsim_ros)/launch/projectairsim.launch">
+      <arg name="nodename" value="group_bridge"/>
+      <arg name="topicsport" value="{topics}"/>
+      <arg name="servicesport" value="{services}"/>
+    </include>
+  </group>
+</launch>
+"""
+
+
+def test_roslaunch_group_ns_with_defaults_then_load_a_scene(rig_factory, tmp_path):
+    """The shipped launch file in <group ns>, its defaults (no scene): load_scene under the group, then a
+    scene loaded on it brings the robots' topics up under the group."""
+    rig = rig_factory()
+    launch = tmp_path / "fleet.launch"
+    launch.write_text(LAUNCH.format(topics=rig.sim.ports.topics, services=rig.sim.ports.services))
+    roslaunch = rig.launcher.start("roslaunch_group", ["roslaunch", str(launch)])
+    topic = "/fleet/ProjectAirSim/node/group_bridge/load_scene"
+    wait_until(lambda: roslaunch.check_alive() is None and subscribed(topic), 90, what=topic)
+    rostopic_pub(rig, topic, SENSORS, "-1")
+    wait_topic("/fleet/airsim_node/Drone1/DownCamera/scene_camera/image", roslaunch)
+    assert "setting scene = '' (parameter ~scene)" in roslaunch.output()
+    lookup("fleet/map", "fleet/airsim_node/Drone1")
+    rig.launcher.stop_all()
