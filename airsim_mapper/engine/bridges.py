@@ -6,7 +6,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, MutableMapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import rospy
@@ -17,7 +17,14 @@ from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.replays import LatchedReplays, connection_header
-from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
+from airsim_mapper.engine.ros_link import (
+    FrameUnknown,
+    PeerListener,
+    TfBroadcaster,
+    TfLookup,
+    message_class,
+    transform_from_pose,
+)
 from airsim_mapper.engine.sim_link import SimLink, SimLinkError
 from airsim_mapper.mapping.model import SIM_TO_ROS, BridgeSpec
 
@@ -62,6 +69,7 @@ class Services:
     tf: TfBroadcaster
     shared: MutableMapping[Any, Any]
     node_action: Callable[[BridgeSpec, dict], Any]  # load_scene and other engine-level actions
+    frames: TfLookup = field(default_factory=TfLookup)  # goals in other tf frames
 
 
 def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
@@ -230,6 +238,11 @@ class RosToSim(Bridge):
             )
             return
         try:
+            ros_msg = self._in_target_frame(ros_msg)
+        except FrameUnknown as exc:
+            self.fail(f"refused a message on {self.spec.ros}, nothing sent: {exc}")
+            return
+        try:
             params = self.convert(ros_msg, self.ctx)
             require_finite(params)
         except ConversionError as exc:
@@ -250,6 +263,14 @@ class RosToSim(Bridge):
                 self.stats.messages += 1
         except Exception as exc:  # the node never dies from one bad message
             self.fail(f"could not forward a message on {spec.ros}: {exc}")
+
+    def _in_target_frame(self, ros_msg: Any) -> Any:
+        """A stamped goal in another tf frame than the rule's target_frame, transformed into it."""
+        target = self.spec.params.get("target_frame")
+        header = getattr(ros_msg, "header", None)
+        if not target or header is None or header.frame_id in ("", target):
+            return ros_msg
+        return self.services.frames.transform_pose(ros_msg, target)
 
     def _on_reply(self, future: Any, params: dict) -> None:
         try:

@@ -468,6 +468,7 @@ class Engine:
         budget = min(UNSUBSCRIBE_TIMEOUT_S, max(0.1, end - time.monotonic() - 0.5))
         answered = self.sim.close(timeout=budget, client_topics=client_topics)
         self.hub.drop_all()
+        self.services.frames.close()
         self.state = STOPPED
         self.publish_status()
         self._status.close()

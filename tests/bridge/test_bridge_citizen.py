@@ -146,3 +146,57 @@ def test_roslaunch_group_ns_with_defaults_then_load_a_scene(rig_factory, tmp_pat
     assert "setting scene = '' (parameter ~scene)" in roslaunch.output()
     lookup("fleet/map", "fleet/airsim_node/Drone1")
     rig.launcher.stop_all()
+
+
+def goal(x: float, y: float, z: float, frame: str, yaw: float = 0.0):
+    import math
+
+    from geometry_msgs.msg import PoseStamped
+
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = x, y, z
+    msg.pose.orientation.w, msg.pose.orientation.z = math.cos(yaw / 2), math.sin(yaw / 2)
+    return msg
+
+
+def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame(rig_factory):
+    import math
+
+    import numpy as np
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+
+    rig = rig_factory()
+    ns = "/sim1/airsim_node/Drone1"
+    node = rig.start_node(
+        "--namespace", "sim1", "--scene", SENSORS, node_name="goal_bridge", wait_for=f"{ns}/actual_pose"
+    )
+    latest: list = []
+    sub = rospy.Subscriber(f"{ns}/actual_pose", PoseStamped, lambda m: latest.append(m.pose))
+    pub = rospy.Publisher(f"{ns}/desired_pose", PoseStamped, queue_size=1)
+    try:
+        wait_until(lambda: pub.get_num_connections() > 0, 20, what="the desired_pose link")
+
+        def at(x: float, y: float, z: float) -> bool:
+            p = latest[-1].position if latest else None
+            return p is not None and np.allclose([p.x, p.y, p.z], [x, y, z], atol=0.05)
+
+        # In the bridge's own namespaced world frame (was refused before).
+        pub.publish(goal(0.0, 0.0, -5.0, "sim1/map", yaw=math.pi / 2))
+        wait_until(lambda: at(0.0, 0.0, -5.0), 15, what="the goal in sim1/map")
+        time.sleep(0.5)  # let tf catch up with the teleport
+        # "1 m ahead" in the robot's own frame: facing east (yaw 90 deg in NED), so 1 m east.
+        pub.publish(goal(1.0, 0.0, 0.0, "sim1/airsim_node/Drone1"))
+        wait_until(lambda: at(0.0, 1.0, -5.0), 15, what="the body-frame goal")
+        q = latest[-1].orientation
+        assert math.isclose(2 * math.atan2(q.z, q.w), math.pi / 2, abs_tol=0.02)  # still facing east
+        # A frame tf does not know: refused with a warning naming it, nothing sent.
+        pub.publish(goal(9.0, 9.0, -9.0, "nowhere_frame"))
+        wait_until(lambda: "'nowhere_frame'" in node.output(), 15, what="the refusal")
+        time.sleep(1.0)
+        assert at(0.0, 1.0, -5.0)
+    finally:
+        sub.unregister()
+        pub.unregister()
+    node.stop()
