@@ -1,7 +1,8 @@
 """ProjectAirSimWrapper: the bridge as an object a mission script embeds (the public API that the Project
 AirSim ROS bridge documentation describes).
 
-Call `rospy.init_node` first. The wrapper either creates its own client (kept in `projectairsim_client`
+Call `rospy.init_node` first. Without a scene the wrapper runs the node's own bridges (load_scene) and
+waits for one. The wrapper either creates its own client (kept in `projectairsim_client`
 and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
 a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow.
 
@@ -28,6 +29,7 @@ from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
@@ -89,7 +91,10 @@ class ProjectAirSimWrapper:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
             client = client_factory()
         self.sim_config_path = str(sim_config_path)
-        name = node_name if node_name is not None else rospy.get_name().lstrip("/")
+        name = node_name if node_name is not None else rospy.get_name().rsplit("/", 1)[-1]
+        # As a ROS name: "sim1" below the node's namespace (ROS_NAMESPACE, <group ns>, __ns:=); "/sim1" as is
+        namespace = resolve_namespace(namespace, rospy.get_namespace())
+        self.namespace = namespace
         self.engine = Engine(
             client,
             self.mapping,
@@ -104,6 +109,7 @@ class ProjectAirSimWrapper:
         self.diagnostics = Diagnostics(self.engine, name)
         self._closed = False
         rospy.on_shutdown(self.shutdown)
+        self.engine.start_node_bridges()  # load_scene is there before (and without) any scene
         if scene:
             self.engine.load_scene(scene)
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import genpy
 
-from airsim_mapper.engine.ros_link import ClosedEndpoint, message_class
+from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, message_class
 
 
 def fake_client() -> Any:
@@ -153,6 +153,7 @@ class FakeRos:
     subscribers: dict[str, FakeEndpoint] = field(default_factory=dict)
     services: dict[str, FakeEndpoint] = field(default_factory=dict)
     transforms: list = field(default_factory=list)
+    closed: bool = False
 
     def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
         message_class(ros_type)  # the type must exist, as rospy would require
@@ -173,3 +174,10 @@ class FakeRos:
 
     def send_tf(self, transforms: list) -> None:
         self.transforms.extend(transforms)
+
+    def transform_pose(self, pose_stamped: Any, target: str) -> Any:
+        """tf knows no frames here."""
+        raise FrameUnknown(pose_stamped.header.frame_id, target, "the fake ROS link has no tf")
+
+    def close(self) -> None:
+        self.closed = True

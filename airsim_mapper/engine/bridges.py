@@ -19,7 +19,8 @@ from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
-from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
+from airsim_mapper.engine.replays import LatchedReplays, connection_header
+from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.mapping.model import BridgeSpec
@@ -226,6 +227,9 @@ class RosToSim(Bridge):
         self.last_message = 0.0
         self.moving = False  # a command was sent since the last watchdog stop
         self.pending: Any = None
+        # An engine action (load_scene) acts once per message: a latched message replayed on a new
+        # connection is ignored.
+        self.replays = LatchedReplays() if self.info.runner == catalog.ACTION else None
 
     def start(self) -> None:
         self.subscriber = self.services.ros.subscriber(
@@ -233,6 +237,18 @@ class RosToSim(Bridge):
         )
 
     def on_message(self, ros_msg: Any) -> None:
+        if self.replays is not None and self.replays.is_replay(connection_header(ros_msg), _payload(ros_msg)):
+            log.info(
+                "%s: ignored the latched message %s replayed it on a new connection",
+                self.spec.name,
+                connection_header(ros_msg).get("callerid", "a publisher"),
+            )
+            return
+        try:
+            ros_msg = self._in_target_frame(ros_msg)
+        except FrameUnknown as exc:
+            self.fail(f"refused a message on {self.spec.ros}, nothing sent: {exc}")
+            return
         try:
             params = self.convert(ros_msg, self.ctx)
             require_finite(params)
@@ -254,6 +270,14 @@ class RosToSim(Bridge):
                 self.stats.messages += 1
         except Exception as exc:  # the node never dies from one bad message
             self.fail(f"could not forward a message on {spec.ros}: {exc}")
+
+    def _in_target_frame(self, ros_msg: Any) -> Any:
+        """A stamped goal in another tf frame than the rule's target_frame, transformed into it."""
+        target = self.spec.params.get("target_frame")
+        header = getattr(ros_msg, "header", None)
+        if not target or header is None or header.frame_id in ("", target):
+            return ros_msg
+        return self.services.ros.transform_pose(ros_msg, target)
 
     def _on_reply(self, future: Any, params: dict) -> None:
         try:
@@ -346,6 +370,14 @@ class RosService(Bridge):
 
 def _accepted(result: Any) -> bool:
     return result is not False and result is not None
+
+
+def _payload(ros_msg: Any) -> Any:
+    """A hashable value of a message's fields (for telling a replay from a new message)."""
+    try:
+        return tuple(repr(getattr(ros_msg, slot)) for slot in ros_msg.__slots__)
+    except AttributeError:
+        return repr(ros_msg)
 
 
 def _fill(response: Any, success: bool, message: str) -> Any:

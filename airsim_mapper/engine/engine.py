@@ -1,8 +1,9 @@
 """The engine: runs the bridges of a mapping for the current scene, and follows scene changes.
 
 Data flows one way: scene + mapping --expand--> BridgeSpecs --build--> runners wired to the sim link and
-the ROS link. A scene change tears the scene's runners down and builds the new scene's; bridges that do
-not depend on the scene (load_scene itself) keep running.
+the ROS link. The node's own bridges (load_scene) start before any scene (`start_node_bridges`) and keep
+running, untouched, across scene changes; a scene change tears the scene's runners down and builds the new
+scene's.
 
 Simulator loss (health.py decides; only a closed connection is a loss): the link is abandoned at once
 (its calls fail fast, its sockets are closed so a restarted server's single topics connection is free),
@@ -152,10 +153,23 @@ class Engine:
             thread.start()
 
     # --- building ---------------------------------------------------------------------------
-    def specs_for(self, scene: Scene) -> tuple[BridgeSpec, ...]:
+    def specs_for(self, scene: Scene | None) -> tuple[BridgeSpec, ...]:
+        """The bridges of `scene`, or the node's own (load_scene) without one."""
         return expand(self.mapping, scene, self.node_name, self.namespace)
 
-    def apply(self, scene: Scene, specs: tuple[BridgeSpec, ...] | None = None) -> tuple[BridgeSpec, ...]:
+    def node_specs(self) -> dict[str, BridgeSpec]:
+        return {spec.name: spec for spec in self.specs_for(None)}
+
+    def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
+        """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
+        with self._lock:
+            if self.scene is not None:
+                return tuple(b.spec for b in self.bridges.values())
+            return self.apply(None)
+
+    def apply(
+        self, scene: Scene | None, specs: tuple[BridgeSpec, ...] | None = None
+    ) -> tuple[BridgeSpec, ...]:
         """Run exactly the bridges of `scene` (its `specs`, when already expanded): stop the old scene's,
         start the new ones."""
         specs = self.specs_for(scene) if specs is None else specs
@@ -204,7 +218,7 @@ class Engine:
         specs = self.specs_for(scene) if specs is None else specs
         with self._lock:
             self._require_link(f"load_scene {scene_file}")
-            self._stop_scene_bridges(keep={})
+            self._stop_scene_bridges(keep={s.name: s for s in specs})  # the node's own bridges stay
             self.hub.drop_all()
             self.sim.forget_all()
             try:
@@ -222,7 +236,7 @@ class Engine:
         """A mission script loaded `scene` itself: its load cleared every subscription, so re-bridge."""
         with self._lock:
             self._require_link("adopt")
-            self._stop_scene_bridges(keep={})
+            self._stop_scene_bridges(keep=self.node_specs())
             self.hub.drop_all()
             self.sim.forget_all()
             self.world = world
@@ -486,6 +500,7 @@ class Engine:
         budget = min(UNSUBSCRIBE_TIMEOUT_S, max(0.1, end - time.monotonic() - 0.5))
         answered = self.sim.close(timeout=budget, client_topics=client_topics)
         self.hub.drop_all()
+        self.ros.close()
         self.state = STOPPED
         self.publish_status()
         self._status.close()
