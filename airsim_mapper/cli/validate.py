@@ -34,6 +34,11 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
     parser.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    parser.add_argument(
+        "--resolved",
+        action="store_true",
+        help="print the mapping with its extends chain merged in, as YAML (after validating it)",
+    )
     return parser
 
 
@@ -51,6 +56,20 @@ def described(spec: str) -> str:
     return spec if path == Path(spec) else f"{spec} ({path})"
 
 
+def resolved_yaml(spec: str) -> str:
+    """The valid mapping `spec` with its extends chain merged in, as a standalone YAML mapping."""
+    import yaml
+
+    from airsim_mapper.mapping.extends import resolved_document
+    from airsim_mapper.mapping.loader import load_mapping
+
+    mapping = load_mapping(spec)  # every problem first
+    path = mapping_path(spec)
+    document = resolved_document(path.read_text(encoding="utf-8"), str(path))
+    header = f"# {described(spec)} with its extends chain merged in ({len(mapping.rules)} rules)\n"
+    return header + yaml.safe_dump(document, sort_keys=False, width=110, allow_unicode=True)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
     try:
@@ -58,6 +77,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as stop:  # argparse has printed the usage message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
     try:
+        if args.resolved:
+            print(resolved_yaml(args.mapping), end="")
+            return EXIT_OK
         if args.scene is None:
             from airsim_mapper.mapping.loader import load_mapping
 

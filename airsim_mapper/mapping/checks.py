@@ -23,6 +23,7 @@ from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
 from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.mapping.origins import file_of
 from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 
@@ -117,7 +118,7 @@ class _Checker:
 
     def add(self, path: tuple[Any, ...], message: str, at_key: bool = False) -> None:
         line, col = self.marks.key(path) if at_key else self.marks.value(path)
-        self.problems.append(Problem(self.file, line, col, message))
+        self.problems.append(Problem(file_of(self.marks, path, self.file, at_key), line, col, message))
 
     def rule(self, rule: Rule, index: int) -> Rule:
         base = ("rules", index)
@@ -184,11 +185,11 @@ class _Checker:
             if bad:
                 self.add(path, f"rule '{rule.name}': {key} '{text}': {bad}")
                 continue
+            declared = self.data.get("variables") or {}
             for name in template.variables(text):
-                if name not in allowed:
-                    hint = (
-                        did_you_mean(name, allowed) or f" (for_each {rule.domain} has: {', '.join(allowed)})"
-                    )
+                if name not in allowed and name not in declared:  # a bad variable is reported itself
+                    known = (*allowed, *declared)
+                    hint = did_you_mean(name, known) or f" (for_each {rule.domain} has: {', '.join(allowed)})"
                     self.add(
                         path,
                         f"rule '{rule.name}': unknown template variable <{name}> in {key} "

@@ -13,8 +13,11 @@ from typing import Any
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.extends import resolve
 from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
+from airsim_mapper.mapping.origins import Origins
 from airsim_mapper.mapping.schema import schema_problems
+from airsim_mapper.mapping.variables import apply_variables
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
 from airsim_mapper.resources import mapping_path
 
@@ -44,11 +47,14 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     if not isinstance(data, dict):
         kind = "a list" if isinstance(data, list) else f"the scalar {data!r}"
         raise MappingError.single(file, f"the top level must be a mapping of keys (found {kind})", 1, 1)
+    data, marks = resolve(data, Origins.of(marks, file), limits=limits)  # extends: one merged document
     located = schema_problems(data, marks, file)
     problems = [problem for _, problem in located]
     bad_rules = {path[1] for path, _ in located if len(path) > 1 and path[0] == "rules"}
     if any(len(path) < 2 or path[0] != "rules" for path, _ in located):
         raise MappingError(sorted(problems))  # the document's frame is broken: rules cannot be built
+    data, unusable = apply_variables(data, marks, file)
+    problems += unusable
     defaults_raw = data.get("defaults", {})
     defaults = _options(defaults_raw, Options())
     convention = defaults_raw.get("convention", "ned")

@@ -11,6 +11,7 @@ from typing import Any
 import jsonschema
 
 from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.origins import file_of
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.resources import SCHEMA_PATH
 
@@ -86,6 +87,7 @@ def schema_problems(data: Any, marks: Marks, file: str) -> list[tuple[tuple[Any,
     problems = []
     for err in validator().iter_errors(data):
         for path, message in _messages(err, data, marks):
-            line, col = marks.key(path) if err.validator == "additionalProperties" else marks.value(path)
-            problems.append((path, Problem(file, line, col, message)))
+            at_key = err.validator == "additionalProperties"
+            line, col = marks.key(path) if at_key else marks.value(path)
+            problems.append((path, Problem(file_of(marks, path, file, at_key), line, col, message)))
     return problems
