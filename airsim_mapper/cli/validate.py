@@ -13,10 +13,12 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from airsim_mapper.mapping.errors import ConfigError
-from airsim_mapper.mapping.model import BridgeSpec
+from airsim_mapper.mapping.expand import selected
+from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
 from airsim_mapper.resources import mapping_path
+from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
 
@@ -91,14 +93,36 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(format_rows(rows))
                 print(f"\n{described(args.mapping)}: valid, {len(rows)} rules")
             return EXIT_OK
-        _, _, bridges = load_and_expand(
+        mapping, scene, bridges = load_and_expand(
             args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace
         )
     except ConfigError as err:
         print(str(err), file=sys.stderr)
         return EXIT_USAGE if err.unreadable else EXIT_INVALID
     _print_bridges(bridges, args.format)
+    summary, warnings = match_report(mapping, scene, args.nodename, args.namespace)
+    if summary and args.format == "text":
+        print("\n" + "\n".join(summary))
+    for warning in warnings:
+        print(warning, file=sys.stderr)
     return EXIT_OK
+
+
+def match_report(
+    mapping: Mapping, scene: Scene, node_name: str, namespace: str
+) -> tuple[list[str], list[str]]:
+    """What each rule's `match` selected in `scene` (one line a rule), and a warning for each rule whose
+    `match` selects nothing there (FILE:LINE: warning: ...)."""
+    summary, warnings = [], []
+    rules = {rule.name: rule for rule in mapping.rules}
+    for name, (matched, total) in selected(mapping, scene, node_name, namespace).items():
+        rule = rules[name]
+        patterns = ", ".join(f"{key}: {' '.join(values)}" for key, values in rule.match.items())
+        summary.append(f"match: rule '{name}' ({patterns}) selects {matched} of {total} elements")
+        if not matched:
+            where = f"{rule.file or mapping.source}:{rule.line}"
+            warnings.append(f"{where}: warning: rule '{name}': match selects nothing in scene {scene.name}")
+    return summary, warnings
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from typing import Any
 from airsim_mapper.convert import catalog
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.match import match_problems
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
 from airsim_mapper.mapping.names import ros_name_problem
 from airsim_mapper.mapping.origins import file_of
@@ -131,6 +132,8 @@ class _Checker:
         self._sides(rule, info, base)
         self._templates(rule, base)
         self._options(rule, base)
+        for path, at_key, message in match_problems(rule.match, rule.domain):
+            self.add((*base, "match", *path), f"rule '{rule.name}': {message}", at_key)
         kind = "topic"
         if rule.ros_type is not None:
             found = ros_type_kind(rule.ros_type)

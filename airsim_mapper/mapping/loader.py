@@ -14,8 +14,9 @@ from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.extends import resolve
+from airsim_mapper.mapping.match import patterns_of
 from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
-from airsim_mapper.mapping.origins import Origins
+from airsim_mapper.mapping.origins import Origins, file_of
 from airsim_mapper.mapping.schema import schema_problems
 from airsim_mapper.mapping.variables import apply_variables
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
@@ -59,7 +60,13 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     defaults = _options(defaults_raw, Options())
     convention = defaults_raw.get("convention", "ned")
     rules = [
-        _rule(raw, defaults, convention, marks.value(("rules", index))[0])
+        _rule(
+            raw,
+            defaults,
+            convention,
+            marks.value(("rules", index))[0],
+            file_of(marks, ("rules", index), file),
+        )
         for index, raw in enumerate(data["rules"])
         if index not in bad_rules
     ]
@@ -90,7 +97,7 @@ def _options(raw: dict[str, Any], base: Options) -> Options:
     return Options(**values, limits=limits)
 
 
-def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int) -> Rule:
+def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, file: str) -> Rule:
     tf = raw.get("tf")
     return Rule(
         name=raw["name"],
@@ -106,4 +113,6 @@ def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int) ->
         options=_options(raw, defaults),
         params=MappingProxyType(dict(raw.get("params") or {})),
         line=line,
+        match=MappingProxyType({key: patterns_of(value) for key, value in (raw.get("match") or {}).items()}),
+        file=file,
     )
