@@ -52,6 +52,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--scene", default=None, help="scene config file to load at start")
     parser.add_argument("--namespace", default="", help="value of the <namespace> template variable")
     parser.add_argument(
+        "--no-watch",
+        action="store_true",
+        help="do not reload the mapping when its files change (~reload_mapping still does)",
+    )
+    parser.add_argument(
         "--shutdown-timeout",
         type=float,
         default=SHUTDOWN_TIMEOUT_S,
@@ -119,6 +124,26 @@ def connect(
     return None
 
 
+def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
+    """Live reload: the `~reload_mapping` service (std_srvs/Trigger) and, with `watch`, the file watcher."""
+    import rospy
+    from std_srvs.srv import Trigger, TriggerResponse
+
+    from airsim_mapper.engine.mapping_reload import MappingReloader
+
+    reloader = MappingReloader(engine, spec, mapping)
+
+    def on_request(_request: Any) -> Any:
+        outcome = reloader.reload("~reload_mapping")
+        return TriggerResponse(success=outcome.applied, message=outcome.message)
+
+    rospy.Service("~reload_mapping", Trigger, on_request)
+    if watch:
+        reloader.start()
+        log.info("watching %s for changes (--no-watch turns this off)", ", ".join(reloader.files))
+    return reloader
+
+
 def main(argv: list[str] | None = None) -> int:
     import rospy
 
@@ -180,8 +205,10 @@ def main(argv: list[str] | None = None) -> int:
         rospy.signal_shutdown("scene not loaded")
         return 1
     log.info("bridges:\n%s", format_table(wrapper.bridges))
+    reloader = serve_reload(wrapper.engine, args.mapping, mapping, watch=not args.no_watch)
     while not stopping():
         time.sleep(0.1)
+    reloader.stop()
     rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")
     return 0
 

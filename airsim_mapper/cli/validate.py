@@ -31,6 +31,12 @@ def _parser() -> argparse.ArgumentParser:
         description="Validate an airsim-mapper mapping YAML (and expand it over a scene).",
     )
     parser.add_argument("mapping", help="the mapping YAML file, or a shipped mapping's name (default, enu)")
+    parser.add_argument(
+        "new",
+        nargs="?",
+        help="an edited mapping: with --scene, print the bridges it adds, removes and changes (what a "
+        "running node's live reload would do)",
+    )
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
     parser.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
@@ -58,6 +64,16 @@ def described(spec: str) -> str:
     return spec if path == Path(spec) else f"{spec} ({path})"
 
 
+def difference(args: argparse.Namespace) -> str:
+    """What replacing args.mapping by args.new changes in the bridges of args.scene."""
+    from airsim_mapper.mapping.diff import bridge_diff, format_diff
+
+    where = (args.scene, args.simconfigpath, args.nodename, args.namespace)
+    _, _, old = load_and_expand(args.mapping, *where)
+    _, _, new = load_and_expand(args.new, *where)
+    return format_diff(bridge_diff(old, new), old, new)
+
+
 def resolved_yaml(spec: str) -> str:
     """The valid mapping `spec` with its extends chain merged in, as a standalone YAML mapping."""
     import yaml
@@ -79,6 +95,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as stop:  # argparse has printed the usage message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
     try:
+        if args.new is not None:
+            if args.scene is None:
+                print("validate-mapping: comparing two mappings needs --scene", file=sys.stderr)
+                return EXIT_USAGE
+            print(difference(args))
+            return EXIT_OK
         if args.resolved:
             print(resolved_yaml(args.mapping), end="")
             return EXIT_OK

@@ -38,6 +38,7 @@ from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune
 from airsim_mapper.engine.ros_link import TfBroadcaster
 from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
+from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
@@ -121,6 +122,7 @@ class Engine:
         self.state = CONNECTED
         self.reason = ""
         self.counters = {"sim_losses": 0, "reconnects": 0, "stalls": 0}
+        self.mapping_report: dict[str, Any] = {}  # live reload's state (engine/mapping_reload.py)
         self._stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self._stopping = threading.Event()
         self._status = StatusPublisher(node_name)
@@ -170,6 +172,37 @@ class Engine:
             except Exception:
                 log.exception("stopping %s failed", name)
             del self.bridges[name]
+
+    # --- mappings ---------------------------------------------------------------------------
+    def apply_mapping(self, mapping: Mapping) -> BridgeDiff:
+        """Run `mapping` instead of the current one, touching only what differs: bridges whose expanded
+        spec is unchanged keep running (their publishers, subscribers and simulator subscriptions), removed
+        and changed ones stop, new and changed ones start. MappingError (nothing changed) when `mapping`
+        does not expand over the running scene."""
+        with self._lock:
+            scene = self.scene
+            specs = expand(mapping, scene, self.node_name, self.namespace) if scene else ()
+            diff = bridge_diff((b.spec for b in self.bridges.values()), specs)
+            self.mapping = mapping
+            if scene is None:
+                return diff  # the next scene is expanded with it
+            for name in (*diff.removed, *diff.changed):
+                try:
+                    self.bridges.pop(name).stop()
+                except Exception:
+                    log.exception("stopping %s failed", name)
+            thaw_heap()
+            streaming = [b for b in self.bridges.values() if isinstance(b, StreamingImage)]
+            started = set(diff.added) | set(diff.changed)
+            for spec in specs:
+                if spec.name in started:
+                    bridge = build(spec, self.services, streaming)
+                    bridge.start()
+                    self.bridges[spec.name] = bridge
+            self.bridges = {spec.name: self.bridges[spec.name] for spec in specs if spec.name in self.bridges}
+            freeze_heap()
+            self.gc_frozen = gc.get_freeze_count()
+        return diff
 
     # --- scenes -----------------------------------------------------------------------------
     def load_scene(self, scene_file: str) -> Scene:
@@ -408,6 +441,7 @@ class Engine:
             "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
             "streams": streams,
             "bridge_errors": errors,
+            **({"mapping": self.mapping_report} if self.mapping_report else {}),
         }
 
     def publish_status(self) -> None:

@@ -163,7 +163,8 @@ def _overlay(
     merged["rules"], problems = _rules(base, base_origins, child, origins, table)
     if problems:
         raise MappingError(sorted(problems))
-    return {key: value for key, value in merged.items() if value is not None}, table.origins()
+    chain = (origins.file, *(base_origins.chain or (base_origins.file,)))
+    return {key: value for key, value in merged.items() if value is not None}, table.origins(chain)
 
 
 def _index(entries: list[tuple[Any, Any]], name: Any) -> int | None:

@@ -83,6 +83,7 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
         defaults=defaults,
         rules=tuple(rules),
         source=file,
+        files=getattr(marks, "chain", ()) or (file,),
     )
 
 

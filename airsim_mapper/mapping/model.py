@@ -113,6 +113,7 @@ class Mapping:
     defaults: Options
     rules: tuple[Rule, ...]
     source: str = "<string>"  # file the mapping came from
+    files: tuple[str, ...] = ()  # source and, with extends, every base it builds on (what a node watches)
 
 
 @dataclass(frozen=True)

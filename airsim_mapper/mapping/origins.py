@@ -18,6 +18,7 @@ class Origins(Marks):
     value_files: dict[KeyPath, str] = field(default_factory=dict)
     key_files: dict[KeyPath, str] = field(default_factory=dict)
     file: str = "<string>"  # the file the user named (for paths nobody wrote, e.g. the top level)
+    chain: tuple[str, ...] = ()  # with extends: this file and each of its bases, in order
 
     @classmethod
     def of(cls, marks: Marks, file: str) -> Origins:
@@ -79,5 +80,5 @@ class Table:
             self.keys[path] = source.keys[path]
             self.key_files[path] = source.key_files.get(path, source.file)
 
-    def origins(self) -> Origins:
-        return Origins(self.values, self.keys, self.value_files, self.key_files, self.file)
+    def origins(self, chain: tuple[str, ...] = ()) -> Origins:
+        return Origins(self.values, self.keys, self.value_files, self.key_files, self.file, chain)
