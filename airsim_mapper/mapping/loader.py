@@ -6,6 +6,7 @@ Every problem is collected and reported at once in one MappingError, each as `FI
 
 from __future__ import annotations
 
+from dataclasses import fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -23,8 +24,8 @@ from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
 from airsim_mapper.resources import mapping_path
 
 DEFAULT_IMAGE_TYPES: dict[int, str] = dict(DOCUMENTED_IMAGE_TYPES)
-OPTION_KEYS = ("queue_size", "latch", "lazy", "rate_limit_hz", "stamp", "enabled", "watchdog_s")
-LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "position_box", "on_violation")
+OPTION_KEYS = tuple(field.name for field in fields(Options) if field.name != "limits")
+LIMIT_KEYS = tuple(field.name for field in fields(Limits))
 
 
 def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:

@@ -82,10 +82,16 @@ def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Itera
         yield path, f"{loc}: {err.message}"
 
 
+def _is_converter(path: tuple[Any, ...]) -> bool:
+    return len(path) == 3 and path[0] == "rules" and path[2] == "converter"
+
+
 def schema_problems(data: Any, marks: Marks, file: str) -> list[tuple[tuple[Any, ...], Problem]]:
     """Every schema violation of `data` with its path, located at its key or value in the file."""
     problems = []
     for err in validator().iter_errors(data):
+        if err.validator == "enum" and _is_converter(tuple(err.absolute_path)):
+            continue  # checks.py reports it, with a did-you-mean, and checks the rest of the rule
         for path, message in _messages(err, data, marks):
             at_key = err.validator == "additionalProperties"
             line, col = marks.key(path) if at_key else marks.value(path)
