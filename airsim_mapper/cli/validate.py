@@ -14,6 +14,7 @@ from pathlib import Path
 
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import selected
+from airsim_mapper.mapping.match import describe
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
@@ -139,7 +140,7 @@ def match_report(
     rules = {rule.name: rule for rule in mapping.rules}
     for name, (matched, total) in selected(mapping, scene, node_name, namespace).items():
         rule = rules[name]
-        patterns = ", ".join(f"{key}: {' '.join(values)}" for key, values in rule.match.items())
+        patterns = describe(rule.match)
         summary.append(f"match: rule '{name}' ({patterns}) selects {matched} of {total} elements")
         if not matched:
             where = f"{rule.file or mapping.source}:{rule.line}"

@@ -132,7 +132,7 @@ class _Checker:
         self._sides(rule, info, base)
         self._templates(rule, base)
         self._options(rule, base)
-        for path, at_key, message in match_problems(rule.match, rule.domain):
+        for path, at_key, message in match_problems(self.data["rules"][index].get("match"), rule.domain):
             self.add((*base, "match", *path), f"rule '{rule.name}': {message}", at_key)
         kind = "topic"
         if rule.ros_type is not None:

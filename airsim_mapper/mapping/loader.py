@@ -15,7 +15,7 @@ from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.extends import resolve
-from airsim_mapper.mapping.match import patterns_of
+from airsim_mapper.mapping.match import selections_of
 from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
 from airsim_mapper.mapping.origins import Origins, file_of
 from airsim_mapper.mapping.schema import schema_problems
@@ -115,6 +115,6 @@ def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, fi
         options=_options(raw, defaults),
         params=MappingProxyType(dict(raw.get("params") or {})),
         line=line,
-        match=MappingProxyType({key: patterns_of(value) for key, value in (raw.get("match") or {}).items()}),
+        match=selections_of(raw.get("match")),
         file=file,
     )

@@ -2,7 +2,9 @@
 
 `match: {robot_name: "Scout*", camera_name: [FrontCam, Belly], image_type: "!depth_*"}` keeps an element
 when every listed variable matches: a value is a shell-style glob (`*`, `?`, `[abc]`, case-sensitive) or a
-list of them; plain patterns are "any of", patterns with a leading `!` are "none of".
+list of them; plain patterns are "any of", patterns with a leading `!` are "none of". A list of such maps
+keeps an element that any of them keeps: `[{camera_name: "!Chase"}, {image_type: "!depth_*"}]` drops only
+the Chase camera's depth images.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from fnmatch import fnmatchcase
+from types import MappingProxyType
 from typing import Any
 
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES
@@ -43,9 +46,32 @@ def patterns_of(value: str | Sequence[str]) -> tuple[str, ...]:
     return (value,) if isinstance(value, str) else tuple(value)
 
 
-def matches(match: Mapping[str, Sequence[str]], variables: Mapping[str, str]) -> bool:
-    """Whether an element with `variables` passes every selector of `match`."""
-    return all(Selector.of(patterns).accepts(variables.get(name, "")) for name, patterns in match.items())
+Selection = Mapping[str, Sequence[str]]
+
+
+def selections_of(raw: Any) -> tuple[Selection, ...]:
+    """A rule's `match` (a map or a list of maps, validated by the schema) as selections of patterns."""
+    if not raw:
+        return ()
+    listed = raw if isinstance(raw, list) else [raw]
+    return tuple(MappingProxyType({k: patterns_of(v) for k, v in one.items()}) for one in listed)
+
+
+def selects(selection: Selection, variables: Mapping[str, str]) -> bool:
+    """Whether an element with `variables` passes every selector of `selection`."""
+    return all(Selector.of(patterns).accepts(variables.get(name, "")) for name, patterns in selection.items())
+
+
+def matches(match: Sequence[Selection], variables: Mapping[str, str]) -> bool:
+    """Whether any selection of `match` keeps an element with `variables` (an empty match keeps all)."""
+    return not match or any(selects(selection, variables) for selection in match)
+
+
+def describe(match: Sequence[Selection]) -> str:
+    """`robot_name: Scout*, camera_name: A B | image_type: !depth_*` for messages."""
+    return " | ".join(
+        ", ".join(f"{key}: {' '.join(values)}" for key, values in selection.items()) for selection in match
+    )
 
 
 def pattern_problem(pattern: str) -> str | None:
@@ -68,11 +94,23 @@ def pattern_problem(pattern: str) -> str | None:
     return None
 
 
-def match_problems(match: Any, domain: str) -> Iterator[tuple[tuple[Any, ...], bool, str]]:
-    """(path below `match`, whether to point at the key, message) for each problem of a rule's `match`:
-    a variable its domain lacks (with a did-you-mean) or a bad pattern."""
+def match_problems(raw: Any, domain: str) -> Iterator[tuple[tuple[Any, ...], bool, str]]:
+    """(path below `match`, whether to point at the key, message) for each problem of a rule's `match` as
+    written (a map or a list of maps, validated by the schema): a variable its domain lacks (with a
+    did-you-mean) or a bad pattern."""
+    if isinstance(raw, dict):
+        yield from _selection_problems(raw, domain)
+    elif isinstance(raw, list):
+        for index, selection in enumerate(raw):
+            for path, at_key, message in _selection_problems(selection, domain):
+                yield (index, *path), at_key, message
+
+
+def _selection_problems(
+    selection: Mapping[str, Any], domain: str
+) -> Iterator[tuple[tuple[Any, ...], bool, str]]:
     allowed = DOMAIN_VARIABLES.get(domain, ())
-    for name, value in match.items():
+    for name, value in selection.items():
         if name not in allowed:
             hint = did_you_mean(name, allowed) or f" (for_each {domain} has: {', '.join(allowed)})"
             yield (name,), True, f"match: <{name}> is not a variable of for_each {domain}{hint}"

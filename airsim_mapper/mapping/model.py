@@ -101,8 +101,9 @@ class Rule:
     params: MappingABC[str, Any]  # free-form converter parameters (e.g. body_frame, method params)
     line: int = 0  # 1-based line of the rule in its file, for messages
     ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)
-    # variable -> glob patterns ("!" = none of): the elements the rule expands over (see mapping.match)
-    match: MappingABC[str, tuple[str, ...]] = field(default_factory=dict)
+    # selections, any of which keeps an element; each maps a variable to glob patterns ("!" = none of);
+    # empty: every element (see mapping.match)
+    match: tuple[MappingABC[str, tuple[str, ...]], ...] = ()
     file: str = ""  # the file the rule (or its override) is written in, when not the mapping's own
 
 

@@ -63,14 +63,32 @@ def test_a_list_of_negations_is_none_of_them_and_globs_are_case_sensitive(scene)
     ]
 
 
+def test_a_list_of_selections_keeps_what_any_of_them_keeps(scene):
+    got = topics('[{camera_name: "!Chase"}, {image_type: "!depth_*"}]', scene)
+    chase = [topic for topic in got if "/Chase/" in topic]
+    assert chase == ["/Scout1/Chase/scene_camera", "/Scout1/Chase/segmentation_camera"]
+    assert len(got) == 18  # 20 less the Chase camera's two depth images
+
+
+def test_bad_entries_of_a_list_of_selections_are_located_errors():
+    with pytest.raises(MappingError) as caught:
+        load_mapping_text(IMAGES + '    match: [{camera_name: A}, {lidar_nme: "x["}]\n', "m.yaml")
+    assert str(caught.value).splitlines() == [
+        "m.yaml:10:32: rule 'image': match: <lidar_nme> is not a variable of for_each camera_capture "
+        "(for_each camera_capture has: node_name, namespace, frame_prefix, scene_name, robot_name, "
+        "camera_name, image_type, image_type_id, sim_image_type)"
+    ]
+
+
 def test_selector_and_matches_are_pure():
     assert Selector.of(["a*", "!ab*"]) == Selector(("a*",), ("ab*",))
     assert Selector.of(["a*", "!ab*"]).accepts("ax") and not Selector.of(["a*", "!ab*"]).accepts("abc")
     assert Selector.of(["!x"]).accepts("y")
-    assert matches({"robot_name": ("R*",)}, {"robot_name": "R1"})
-    assert not matches(
-        {"robot_name": ("R*",), "camera_name": ("C",)}, {"robot_name": "R1", "camera_name": "D"}
-    )
+    assert matches([{"robot_name": ("R*",)}], {"robot_name": "R1"})
+    assert matches([], {"robot_name": "R1"})
+    both = {"robot_name": ("R*",), "camera_name": ("C",)}
+    assert not matches([both], {"robot_name": "R1", "camera_name": "D"})
+    assert matches([both, {"camera_name": ("D",)}], {"robot_name": "R1", "camera_name": "D"})
 
 
 @pytest.mark.parametrize(
