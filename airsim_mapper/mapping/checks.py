@@ -242,8 +242,8 @@ class _Checker:
                 )
             else:
                 names[rule.name] = index
-            if rule.ros is None or not rule.options.enabled:
-                continue
+            if rule.ros is None or not rule.options.enabled or rule.match:
+                continue  # rules with a match may share a template; expansion finds real collisions
             if rule.ros in outputs:
                 other, line = outputs[rule.ros]
                 self.add(
