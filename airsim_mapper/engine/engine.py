@@ -191,7 +191,6 @@ class Engine:
                     self.bridges.pop(name).stop()
                 except Exception:
                     log.exception("stopping %s failed", name)
-            thaw_heap()
             streaming = [b for b in self.bridges.values() if isinstance(b, StreamingImage)]
             started = set(diff.added) | set(diff.changed)
             for spec in specs:
@@ -200,7 +199,9 @@ class Engine:
                     bridge.start()
                     self.bridges[spec.name] = bridge
             self.bridges = {spec.name: self.bridges[spec.name] for spec in specs if spec.name in self.bridges}
-            freeze_heap()
+            # No full collection here (freeze_heap's would stop every running bridge for tens of ms): the
+            # new objects join the frozen heap as they are; cycles of the stopped bridges stay uncollected.
+            gc.freeze()
             self.gc_frozen = gc.get_freeze_count()
         return diff
 

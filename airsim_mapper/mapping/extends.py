@@ -18,6 +18,7 @@ removals of rule names the base lacks are located errors.
 from __future__ import annotations
 
 import copy
+import functools
 from pathlib import Path
 from typing import Any
 
@@ -90,10 +91,18 @@ def _read_base(spec: str, origins: Origins, chain: tuple[Path, ...], limits: Yam
                 )
             ]
         ) from None
-    data, marks = load_marked(text, str(path), limits)
+    data, origins = _parsed(text, str(path), limits)
+    return resolve(data, origins, (*chain, resolved), limits)
+
+
+@functools.lru_cache(maxsize=16)
+def _parsed(text: str, file: str, limits: YamlLimits | None) -> tuple[dict[str, Any], Origins]:
+    """A base file's data and marks, parsed once per text: a live reload of a small mapping that extends
+    `default` re-reads the base but does not parse it again. Nothing downstream mutates them."""
+    data, marks = load_marked(text, file, limits)
     if not isinstance(data, dict):
-        raise MappingError.single(str(path), "the top level must be a mapping of keys", 1, 1)
-    return resolve(data, Origins.of(marks, str(path)), (*chain, resolved), limits)
+        raise MappingError.single(file, "the top level must be a mapping of keys", 1, 1)
+    return data, Origins.of(marks, file)
 
 
 def _frame_problems(data: dict[str, Any], origins: Origins) -> list[Problem]:

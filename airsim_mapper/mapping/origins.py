@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,6 +34,16 @@ class Origins(Marks):
             file,
         )
 
+    @functools.cached_property
+    def heads(self) -> dict[KeyPath, tuple[list[KeyPath], list[KeyPath]]]:
+        """Value and key paths grouped by their first two parts (a rule's subtree), for Table.copy."""
+        groups: dict[KeyPath, tuple[list[KeyPath], list[KeyPath]]] = {}
+        for which, table in enumerate((self.values, self.keys)):
+            for path in table:
+                if len(path) >= 2:
+                    groups.setdefault(path[:2], ([], []))[which].append(path)
+        return groups
+
     def file_of(self, path: KeyPath, at_key: bool = False) -> str:
         """The file `path`'s value (or key) was written in: the same walk up as `value` and `key`."""
         if at_key and path in self.keys:
@@ -61,14 +72,17 @@ class Table:
     def copy(self, source: Origins, old: KeyPath, new: KeyPath) -> None:
         """Copy every mark at or below `old` in `source` to the same place below `new`."""
         size = len(old)
-        for table, files, target, target_files in (
-            (source.values, source.value_files, self.values, self.value_files),
-            (source.keys, source.key_files, self.keys, self.key_files),
+        group = source.heads.get(old, ([], [])) if size == 2 else None
+        for which, (table, files, target, target_files) in enumerate(
+            (
+                (source.values, source.value_files, self.values, self.value_files),
+                (source.keys, source.key_files, self.keys, self.key_files),
+            )
         ):
-            for path, mark in table.items():
+            for path in table if group is None else group[which]:
                 if path[:size] == old:
                     moved = (*new, *path[size:])
-                    target[moved] = mark
+                    target[moved] = table[path]
                     target_files[moved] = files.get(path, source.file)
 
     def copy_one(self, source: Origins, path: KeyPath) -> None:
