@@ -151,6 +151,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
             help=f"{setting.help} (default {setting.default!r}{extra})",
         )
     parser.add_argument(
+        "--no-watch",
+        action="store_true",
+        help="do not reload the mapping when its files change (~reload_mapping still does)",
+    )
+    parser.add_argument(
         "--shutdown-timeout",
         type=float,
         default=SHUTDOWN_TIMEOUT_S,
@@ -277,6 +282,26 @@ def config_problem(
         return None, f"{settings['mapping']}: {exc.strerror or exc}"
 
 
+def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
+    """Live reload: the `~reload_mapping` service (std_srvs/Trigger) and, with `watch`, the file watcher."""
+    import rospy
+    from std_srvs.srv import Trigger, TriggerResponse
+
+    from airsim_mapper.engine.mapping_reload import MappingReloader
+
+    reloader = MappingReloader(engine, spec, mapping)
+
+    def on_request(_request: Any) -> Any:
+        outcome = reloader.reload("~reload_mapping")
+        return TriggerResponse(success=outcome.applied, message=outcome.message)
+
+    rospy.Service("~reload_mapping", Trigger, on_request)
+    if watch:
+        reloader.start()
+        log.info("watching %s for changes (--no-watch turns this off)", ", ".join(reloader.files))
+    return reloader
+
+
 def main(argv: list[str] | None = None) -> int:
     import rospy
 
@@ -332,7 +357,7 @@ def main(argv: list[str] | None = None) -> int:
         print(startup.failure, file=sys.stderr)
         rospy.signal_shutdown("start-up failed")
         return 1
-    wrapper = startup.wrapper
+    wrapper, reloader = startup.wrapper, None
     if wrapper is not None:
         log.info("bridges:\n%s", format_table(wrapper.bridges))
         log.info("namespace %r (topics under it, frames prefixed with it)", wrapper.namespace or "/")
@@ -340,8 +365,13 @@ def main(argv: list[str] | None = None) -> int:
             topics = [b.ros for b in wrapper.bridges if b.converter == "load_scene"]
             waiting_on = " or ".join(topics) or "(the mapping has no load_scene rule)"
             log.info("no --scene: waiting for a scene file name on %s", waiting_on)
+        reloader = serve_reload(
+            wrapper.engine, settings["mapping"], prepared.mapping, watch=not args.no_watch
+        )
     while not stopping():
         time.sleep(0.1)
+    if reloader is not None:
+        reloader.stop()
     rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")
     return 0
 

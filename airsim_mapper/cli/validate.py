@@ -13,10 +13,13 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from airsim_mapper.mapping.errors import ConfigError
-from airsim_mapper.mapping.model import BridgeSpec
+from airsim_mapper.mapping.expand import selected
+from airsim_mapper.mapping.match import describe
+from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
 from airsim_mapper.resources import mapping_path
+from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
 
@@ -29,11 +32,22 @@ def _parser() -> argparse.ArgumentParser:
         description="Validate an airsim-mapper mapping YAML (and expand it over a scene).",
     )
     parser.add_argument("mapping", help="the mapping YAML file, or a shipped mapping's name (default, enu)")
+    parser.add_argument(
+        "new",
+        nargs="?",
+        help="an edited mapping: with --scene, print the bridges it adds, removes and changes (what a "
+        "running node's live reload would do)",
+    )
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
     parser.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
     parser.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    parser.add_argument(
+        "--resolved",
+        action="store_true",
+        help="print the mapping with its extends chain merged in, as YAML (after validating it)",
+    )
     return parser
 
 
@@ -51,6 +65,30 @@ def described(spec: str) -> str:
     return spec if path == Path(spec) else f"{spec} ({path})"
 
 
+def difference(args: argparse.Namespace) -> str:
+    """What replacing args.mapping by args.new changes in the bridges of args.scene."""
+    from airsim_mapper.mapping.diff import bridge_diff, format_diff
+
+    where = (args.scene, args.simconfigpath, args.nodename, args.namespace)
+    _, _, old = load_and_expand(args.mapping, *where)
+    _, _, new = load_and_expand(args.new, *where)
+    return format_diff(bridge_diff(old, new), old, new)
+
+
+def resolved_yaml(spec: str) -> str:
+    """The valid mapping `spec` with its extends chain merged in, as a standalone YAML mapping."""
+    import yaml
+
+    from airsim_mapper.mapping.extends import resolved_document
+    from airsim_mapper.mapping.loader import load_mapping
+
+    mapping = load_mapping(spec)  # every problem first
+    path = mapping_path(spec)
+    document = resolved_document(path.read_text(encoding="utf-8"), str(path))
+    header = f"# {described(spec)} with its extends chain merged in ({len(mapping.rules)} rules)\n"
+    return header + yaml.safe_dump(document, sort_keys=False, width=110, allow_unicode=True)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
     try:
@@ -58,6 +96,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as stop:  # argparse has printed the usage message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
     try:
+        if args.new is not None:
+            if args.scene is None:
+                print("validate-mapping: comparing two mappings needs --scene", file=sys.stderr)
+                return EXIT_USAGE
+            print(difference(args))
+            return EXIT_OK
+        if args.resolved:
+            print(resolved_yaml(args.mapping), end="")
+            return EXIT_OK
         if args.scene is None:
             from airsim_mapper.mapping.loader import load_mapping
 
@@ -69,14 +116,36 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(format_rows(rows))
                 print(f"\n{described(args.mapping)}: valid, {len(rows)} rules")
             return EXIT_OK
-        _, _, bridges = load_and_expand(
+        mapping, scene, bridges = load_and_expand(
             args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace
         )
     except ConfigError as err:
         print(str(err), file=sys.stderr)
         return EXIT_USAGE if err.unreadable else EXIT_INVALID
     _print_bridges(bridges, args.format)
+    summary, warnings = match_report(mapping, scene, args.nodename, args.namespace)
+    if summary and args.format == "text":
+        print("\n" + "\n".join(summary))
+    for warning in warnings:
+        print(warning, file=sys.stderr)
     return EXIT_OK
+
+
+def match_report(
+    mapping: Mapping, scene: Scene, node_name: str, namespace: str
+) -> tuple[list[str], list[str]]:
+    """What each rule's `match` selected in `scene` (one line a rule), and a warning for each rule whose
+    `match` selects nothing there (FILE:LINE: warning: ...)."""
+    summary, warnings = [], []
+    rules = {rule.name: rule for rule in mapping.rules}
+    for name, (matched, total) in selected(mapping, scene, node_name, namespace).items():
+        rule = rules[name]
+        patterns = describe(rule.match)
+        summary.append(f"match: rule '{name}' ({patterns}) selects {matched} of {total} elements")
+        if not matched:
+            where = f"{rule.file or mapping.source}:{rule.line}"
+            warnings.append(f"{where}: warning: rule '{name}': match selects nothing in scene {scene.name}")
+    return summary, warnings
 
 
 if __name__ == "__main__":

@@ -53,6 +53,27 @@ def bridge_status(bridge: Bridge, seen: _Seen, now: float, drops: int, prefix: s
     return {"name": f"{prefix}{spec.name}", "level": level, "message": message, "values": values}
 
 
+def mapping_status(report: dict[str, Any], prefix: str) -> dict[str, Any]:
+    """The mapping's status: ERROR with the located errors while the last reload stands rejected."""
+    rejected = report["state"] == "rejected"
+    errors = report.get("errors") or []
+    message = f"edit rejected, bridges unchanged: {errors[0]}" if rejected and errors else report["state"]
+    values = {
+        "file": report["file"],
+        "state": report["state"],
+        "reloads": str(report["reloads"]),
+        "rejections": str(report["rejections"]),
+        "last_change": report.get("last_change", ""),
+        **{f"error_{index + 1}": line for index, line in enumerate(errors)},
+    }
+    return {
+        "name": f"{prefix}mapping",
+        "level": ERROR if rejected else OK,
+        "message": message,
+        "values": values,
+    }
+
+
 class Diagnostics:
     """Publishes the engine's bridge statistics on /diagnostics until stopped."""
 
@@ -72,6 +93,9 @@ class Diagnostics:
     def statuses(self, now: float) -> list[dict[str, Any]]:
         streams = self.engine.hub.streams()
         out = [self.connection_status(now)]
+        report = getattr(self.engine, "mapping_report", None)
+        if report:
+            out.append(mapping_status(report, self.prefix))
         seen_now: dict[str, _Seen] = {}
         for name, bridge in list(self.engine.bridges.items()):
             topic = getattr(bridge, "topic", None)

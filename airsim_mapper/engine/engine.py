@@ -40,6 +40,7 @@ from airsim_mapper.engine.ros_link import RosLink
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
+from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
@@ -140,6 +141,7 @@ class Engine:
         self.state = CONNECTED
         self.reason = ""
         self.counters = {"sim_losses": 0, "reconnects": 0, "stalls": 0}
+        self.mapping_report: dict[str, Any] = {}  # live reload's state (engine/mapping_reload.py)
         self._stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self._stopping = threading.Event()
         self._status = StatusPublisher(self.ros, node_name)
@@ -202,6 +204,35 @@ class Engine:
             except Exception:
                 log.exception("stopping %s failed", name)
             del self.bridges[name]
+
+    # --- mappings ---------------------------------------------------------------------------
+    def apply_mapping(self, mapping: Mapping) -> BridgeDiff:
+        """Run `mapping` instead of the current one, touching only what differs: bridges whose expanded
+        spec is unchanged keep running (their publishers, subscribers and simulator subscriptions), removed
+        and changed ones stop, new and changed ones start. Without a scene that is the node's own bridges.
+        MappingError (nothing changed) when `mapping` does not expand over the running scene."""
+        with self._lock:
+            specs = expand(mapping, self.scene, self.node_name, self.namespace)
+            diff = bridge_diff((b.spec for b in self.bridges.values()), specs)
+            self.mapping = mapping
+            for name in (*diff.removed, *diff.changed):
+                try:
+                    self.bridges.pop(name).stop()
+                except Exception:
+                    log.exception("stopping %s failed", name)
+            started = set(diff.added) | set(diff.changed)
+            for spec in specs:
+                if spec.name in started:
+                    bridge = build(spec, self.services)
+                    bridge.start()
+                    self.bridges[spec.name] = bridge
+            self.bridges = {spec.name: self.bridges[spec.name] for spec in specs if spec.name in self.bridges}
+            if self._freeze_heap:
+                # No full collection here (freeze_heap's would stop every running bridge for tens of ms):
+                # the new objects join the frozen heap as they are; the stopped bridges' cycles stay.
+                gc.freeze()
+                self.gc_frozen = gc.get_freeze_count()
+        return diff
 
     # --- scenes -----------------------------------------------------------------------------
     def load_scene(self, scene_file: str | Scene, specs: tuple[BridgeSpec, ...] | None = None) -> Scene:
@@ -452,6 +483,7 @@ class Engine:
             "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
             "streams": streams,
             "bridge_errors": errors,
+            **({"mapping": self.mapping_report} if self.mapping_report else {}),
         }
 
     def publish_status(self) -> None:

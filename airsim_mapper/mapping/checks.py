@@ -21,8 +21,10 @@ from typing import Any
 from airsim_mapper.convert import catalog
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.match import match_problems
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
 from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.mapping.origins import file_of
 from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 
@@ -118,7 +120,7 @@ class _Checker:
 
     def add(self, path: tuple[Any, ...], message: str, at_key: bool = False) -> None:
         line, col = self.marks.key(path) if at_key else self.marks.value(path)
-        self.problems.append(Problem(self.file, line, col, message))
+        self.problems.append(Problem(file_of(self.marks, path, self.file, at_key), line, col, message))
 
     def rule(self, rule: Rule, index: int) -> Rule:
         base = ("rules", index)
@@ -131,6 +133,8 @@ class _Checker:
         self._sides(rule, info, base)
         self._templates(rule, base)
         self._options(rule, base)
+        for path, at_key, message in match_problems(self.data["rules"][index].get("match"), rule.domain):
+            self.add((*base, "match", *path), f"rule '{rule.name}': {message}", at_key)
         kind = "topic"
         if rule.ros_type is not None:
             found = ros_type_kind(rule.ros_type)
@@ -185,11 +189,11 @@ class _Checker:
             if bad:
                 self.add(path, f"rule '{rule.name}': {key} '{text}': {bad}")
                 continue
+            declared = self.data.get("variables") or {}
             for name in template.variables(text):
-                if name not in allowed:
-                    hint = (
-                        did_you_mean(name, allowed) or f" (for_each {rule.domain} has: {', '.join(allowed)})"
-                    )
+                if name not in allowed and name not in declared:  # a bad variable is reported itself
+                    known = (*allowed, *declared)
+                    hint = did_you_mean(name, known) or f" (for_each {rule.domain} has: {', '.join(allowed)})"
                     self.add(
                         path,
                         f"rule '{rule.name}': unknown template variable <{name}> in {key} "
@@ -252,8 +256,8 @@ class _Checker:
                 )
             else:
                 names[rule.name] = index
-            if rule.ros is None or not rule.options.enabled:
-                continue
+            if rule.ros is None or not rule.options.enabled or rule.match:
+                continue  # rules with a match may share a template; expansion finds real collisions
             if rule.ros in outputs:
                 other, line = outputs[rule.ros]
                 self.add(

@@ -27,6 +27,7 @@ from airsim_mapper.convert import catalog
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import MappingError, Problem
+from airsim_mapper.mapping.match import matches
 from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
 from airsim_mapper.mapping.model import Mapping as MappingDoc
 from airsim_mapper.mapping.names import ros_name_problem
@@ -169,22 +170,36 @@ def expand(
         if not rule.options.enabled:
             continue
         for key, variables, source in elements(rule, mapping, scene, node_name, namespace):
+            if rule.match and not matches(rule.match, variables):
+                continue
             bridge = _bridge(rule, key, variables, source)
             if bridge.ros is not None:
                 why = ros_name_problem(bridge.ros)
                 if why:
                     message = f"bridge {bridge.name}: ROS name '{bridge.ros}' is not valid: {why}"
-                    problems.append(Problem(mapping.source, rule.line, 1, message))
+                    problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
                 elif bridge.ros in owners:
                     other = owners[bridge.ros]
                     message = (
                         f"bridge {bridge.name}: ROS name '{bridge.ros}' is also produced by "
                         f"{other.name} (rule at line {lines[other.rule]})"
                     )
-                    problems.append(Problem(mapping.source, rule.line, 1, message))
+                    problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
                 else:
                     owners[bridge.ros] = bridge
             bridges.append(bridge)
     if problems:
         raise MappingError(problems)
     return tuple(bridges)
+
+
+def selected(
+    mapping: MappingDoc, scene: Scene, node_name: str, namespace: str = ""
+) -> dict[str, tuple[int, int]]:
+    """For each enabled rule with a `match`: (elements it matches, elements of its domain) in `scene`."""
+    counts = {}
+    for rule in mapping.rules:
+        if rule.match and rule.options.enabled:
+            found = [variables for _, variables, _ in elements(rule, mapping, scene, node_name, namespace)]
+            counts[rule.name] = (sum(matches(rule.match, v) for v in found), len(found))
+    return counts

@@ -6,6 +6,7 @@ Every problem is collected and reported at once in one MappingError, each as `FI
 
 from __future__ import annotations
 
+from dataclasses import fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -13,14 +14,18 @@ from typing import Any
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.extends import resolve
+from airsim_mapper.mapping.match import selections_of
 from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
+from airsim_mapper.mapping.origins import Origins, file_of
 from airsim_mapper.mapping.schema import schema_problems
+from airsim_mapper.mapping.variables import apply_variables
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
 from airsim_mapper.resources import mapping_path
 
 DEFAULT_IMAGE_TYPES: dict[int, str] = dict(DOCUMENTED_IMAGE_TYPES)
-OPTION_KEYS = ("queue_size", "latch", "lazy", "rate_limit_hz", "stamp", "enabled", "watchdog_s")
-LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "position_box", "on_violation")
+OPTION_KEYS = tuple(field.name for field in fields(Options) if field.name != "limits")
+LIMIT_KEYS = tuple(field.name for field in fields(Limits))
 
 
 def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
@@ -44,16 +49,25 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     if not isinstance(data, dict):
         kind = "a list" if isinstance(data, list) else f"the scalar {data!r}"
         raise MappingError.single(file, f"the top level must be a mapping of keys (found {kind})", 1, 1)
+    data, marks = resolve(data, Origins.of(marks, file), limits=limits)  # extends: one merged document
     located = schema_problems(data, marks, file)
     problems = [problem for _, problem in located]
     bad_rules = {path[1] for path, _ in located if len(path) > 1 and path[0] == "rules"}
     if any(len(path) < 2 or path[0] != "rules" for path, _ in located):
         raise MappingError(sorted(problems))  # the document's frame is broken: rules cannot be built
+    data, unusable = apply_variables(data, marks, file)
+    problems += unusable
     defaults_raw = data.get("defaults", {})
     defaults = _options(defaults_raw, Options())
     convention = defaults_raw.get("convention", "ned")
     rules = [
-        _rule(raw, defaults, convention, marks.value(("rules", index))[0])
+        _rule(
+            raw,
+            defaults,
+            convention,
+            marks.value(("rules", index))[0],
+            file_of(marks, ("rules", index), file),
+        )
         for index, raw in enumerate(data["rules"])
         if index not in bad_rules
     ]
@@ -70,6 +84,7 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
         defaults=defaults,
         rules=tuple(rules),
         source=file,
+        files=getattr(marks, "chain", ()) or (file,),
     )
 
 
@@ -84,7 +99,7 @@ def _options(raw: dict[str, Any], base: Options) -> Options:
     return Options(**values, limits=limits)
 
 
-def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int) -> Rule:
+def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, file: str) -> Rule:
     tf = raw.get("tf")
     return Rule(
         name=raw["name"],
@@ -100,4 +115,6 @@ def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int) ->
         options=_options(raw, defaults),
         params=MappingProxyType(dict(raw.get("params") or {})),
         line=line,
+        match=selections_of(raw.get("match")),
+        file=file,
     )

@@ -101,6 +101,10 @@ class Rule:
     params: MappingABC[str, Any]  # free-form converter parameters (e.g. body_frame, method params)
     line: int = 0  # 1-based line of the rule in its file, for messages
     ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)
+    # selections, any of which keeps an element; each maps a variable to glob patterns ("!" = none of);
+    # empty: every element (see mapping.match)
+    match: tuple[MappingABC[str, tuple[str, ...]], ...] = ()
+    file: str = ""  # the file the rule (or its override) is written in, when not the mapping's own
 
 
 @dataclass(frozen=True)
@@ -110,6 +114,7 @@ class Mapping:
     defaults: Options
     rules: tuple[Rule, ...]
     source: str = "<string>"  # file the mapping came from
+    files: tuple[str, ...] = ()  # source and, with extends, every base it builds on (what a node watches)
 
 
 @dataclass(frozen=True)

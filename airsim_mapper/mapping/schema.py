@@ -11,6 +11,7 @@ from typing import Any
 import jsonschema
 
 from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.origins import file_of
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.resources import SCHEMA_PATH
 
@@ -81,11 +82,18 @@ def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Itera
         yield path, f"{loc}: {err.message}"
 
 
+def _is_converter(path: tuple[Any, ...]) -> bool:
+    return len(path) == 3 and path[0] == "rules" and path[2] == "converter"
+
+
 def schema_problems(data: Any, marks: Marks, file: str) -> list[tuple[tuple[Any, ...], Problem]]:
     """Every schema violation of `data` with its path, located at its key or value in the file."""
     problems = []
     for err in validator().iter_errors(data):
+        if err.validator == "enum" and _is_converter(tuple(err.absolute_path)):
+            continue  # checks.py reports it, with a did-you-mean, and checks the rest of the rule
         for path, message in _messages(err, data, marks):
-            line, col = marks.key(path) if err.validator == "additionalProperties" else marks.value(path)
-            problems.append((path, Problem(file, line, col, message)))
+            at_key = err.validator == "additionalProperties"
+            line, col = marks.key(path) if at_key else marks.value(path)
+            problems.append((path, Problem(file_of(marks, path, file, at_key), line, col, message)))
     return problems

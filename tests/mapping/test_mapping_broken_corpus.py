@@ -38,6 +38,14 @@ def test_the_corpus_covers_every_kind_of_mistake_and_states_its_expected_message
         "top_level_list",
         "python_tag",
         "alias_bomb",
+        "extends_cycle",
+        "extends_missing_base",
+        "extends_unknown_rule",
+        "extends_remove_unknown_rule",
+        "unknown_mapping_variable",
+        "variable_cycle",
+        "match_unknown_variable",
+        "match_bad_glob",
     ):
         assert f"{kind}.yaml" in names
     assert all(expectations(path) for path in CORPUS)

@@ -1,0 +1,98 @@
+"""Where each value of a mapping document was written, when the document was merged from several files
+(`extends`): the marks of `yamlmarks.Marks` plus the file of each value and key."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+from typing import Any
+
+from airsim_mapper.mapping.yamlmarks import Marks
+
+KeyPath = tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class Origins(Marks):
+    """Marks of a document merged from several files: each value and key also knows its file."""
+
+    value_files: dict[KeyPath, str] = field(default_factory=dict)
+    key_files: dict[KeyPath, str] = field(default_factory=dict)
+    file: str = "<string>"  # the file the user named (for paths nobody wrote, e.g. the top level)
+    chain: tuple[str, ...] = ()  # with extends: this file and each of its bases, in order
+
+    @classmethod
+    def of(cls, marks: Marks, file: str) -> Origins:
+        """The marks of one file."""
+        if isinstance(marks, Origins):
+            return marks
+        return cls(
+            dict(marks.values),
+            dict(marks.keys),
+            dict.fromkeys(marks.values, file),
+            dict.fromkeys(marks.keys, file),
+            file,
+        )
+
+    @functools.cached_property
+    def heads(self) -> dict[KeyPath, tuple[list[KeyPath], list[KeyPath]]]:
+        """Value and key paths grouped by their first two parts (a rule's subtree), for Table.copy."""
+        groups: dict[KeyPath, tuple[list[KeyPath], list[KeyPath]]] = {}
+        for which, table in enumerate((self.values, self.keys)):
+            for path in table:
+                if len(path) >= 2:
+                    groups.setdefault(path[:2], ([], []))[which].append(path)
+        return groups
+
+    def file_of(self, path: KeyPath, at_key: bool = False) -> str:
+        """The file `path`'s value (or key) was written in: the same walk up as `value` and `key`."""
+        if at_key and path in self.keys:
+            return self.key_files.get(path, self.file)
+        for cut in range(len(path), -1, -1):
+            if path[:cut] in self.values:
+                return self.value_files.get(path[:cut], self.file)
+        return self.file
+
+
+def file_of(marks: Marks, path: KeyPath, file: str, at_key: bool = False) -> str:
+    """The file a problem at `path` belongs to: from Origins when the document was merged, else `file`."""
+    return marks.file_of(path, at_key) if isinstance(marks, Origins) else file
+
+
+class Table:
+    """Origins under construction: copies of subtrees of other Origins, re-rooted."""
+
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.values: dict[KeyPath, tuple[int, int]] = {}
+        self.keys: dict[KeyPath, tuple[int, int]] = {}
+        self.value_files: dict[KeyPath, str] = {}
+        self.key_files: dict[KeyPath, str] = {}
+
+    def copy(self, source: Origins, old: KeyPath, new: KeyPath) -> None:
+        """Copy every mark at or below `old` in `source` to the same place below `new`."""
+        size = len(old)
+        group = source.heads.get(old, ([], [])) if size == 2 else None
+        for which, (table, files, target, target_files) in enumerate(
+            (
+                (source.values, source.value_files, self.values, self.value_files),
+                (source.keys, source.key_files, self.keys, self.key_files),
+            )
+        ):
+            for path in table if group is None else group[which]:
+                if path[:size] == old:
+                    moved = (*new, *path[size:])
+                    target[moved] = table[path]
+                    target_files[moved] = files.get(path, source.file)
+
+    def copy_one(self, source: Origins, path: KeyPath) -> None:
+        """Copy the marks of `path` itself (not those below it)."""
+        if path in source.values:
+            self.values[path] = source.values[path]
+            self.value_files[path] = source.value_files.get(path, source.file)
+        if path in source.keys:
+            self.keys[path] = source.keys[path]
+            self.key_files[path] = source.key_files.get(path, source.file)
+
+    def origins(self, chain: tuple[str, ...] = ()) -> Origins:
+        return Origins(self.values, self.keys, self.value_files, self.key_files, self.file, chain)
