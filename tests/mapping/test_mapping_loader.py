@@ -201,3 +201,16 @@ def test_an_image_rule_may_bound_its_pixels_and_a_bad_bound_is_a_located_error()
     assert str(err.value) == (
         "m.yaml:14:28: rule 'cmd_vel': params.max_pixels applies only to the image converters"
     )
+
+
+def test_a_fifo_given_as_mapping_is_refused_at_once(tmp_path):
+    import os
+
+    from airsim_mapper.mapping.loader import load_mapping
+
+    fifo = tmp_path / "mapping.yaml"
+    os.mkfifo(fifo)
+    with pytest.raises(MappingError) as err:
+        load_mapping(fifo)
+    assert str(err.value) == f"{fifo}: the mapping file is a FIFO (named pipe), not a regular file"
+    assert not err.value.unreadable

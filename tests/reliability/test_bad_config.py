@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -70,6 +71,12 @@ def config_dir(tmp_path: Path) -> Path:
     )
     scene["actors"] = "not a list"
     (root / "schema_violation.jsonc").write_text(json.dumps(scene))
+    os.mkfifo(root / "fifo.jsonc")  # a FIFO with no writer: opening it for reading used to block for good
+    os.mkfifo(root / "robot_fifo.jsonc")
+    text = (root / SCENE).read_text()
+    (root / "fifo_robot.jsonc").write_text(text.replace("robot_quadrotor_sensors.jsonc", "robot_fifo.jsonc"))
+    with open(root / "big.jsonc", "wb") as big:  # sparse: 17 MiB of size, no disk
+        big.truncate(17 * 1024 * 1024)
     outside = tmp_path / "outside.jsonc"
     shutil.copy(root / SCENE, outside)
     (root / "escape.jsonc").symlink_to(outside)
@@ -92,6 +99,9 @@ def test_bad_scenes_on_load_scene_are_refused_and_the_current_scene_keeps_runnin
         str(config_dir / SCENE): "must be relative",
         "escape.jsonc": "symlink",
         "../configs/" + SCENE: "'..'",
+        "fifo.jsonc": "the scene file is a FIFO (named pipe), not a regular file",
+        "fifo_robot.jsonc": "robot config of actor 'Drone1' is a FIFO (named pipe), not a regular file",
+        "big.jsonc": "is 17825792 bytes or more, over the limit of 16777216 bytes",
     }
     sender = probe(launcher, "load", "strings", "/ProjectAirSim/node/picky/load_scene", *bad)
     wait_output(sender, "SENT", 30)
