@@ -155,10 +155,19 @@ class _Builder:
         mappings' entries (an earlier mapping of a list wins over a later one, as in PyYAML), and the
         mapping's own keys win over every merged one; only the own keys must be unique."""
         own_count = sum(key.tag != MERGE_TAG for key, _value in node.value)
+        if own_count < len(node.value):
+            entries = _flat_size(node, {})
+            if entries > self.limits.max_values:
+                self.problem(
+                    node,
+                    f"merge keys expand this mapping to more than {self.limits.max_values} entries "
+                    "(a merge bomb?); nothing was loaded",
+                )
+                raise _TooLarge
         try:
             self.loader.flatten_mapping(node)  # merged pairs first, then the own ones (PyYAML's order)
-        except yaml.YAMLError as err:
-            self.problem(node, f"invalid YAML merge: {getattr(err, 'problem', err)}")
+        except (yaml.YAMLError, RecursionError) as err:
+            self.problem(node, f"invalid YAML merge: {getattr(err, 'problem', None) or type(err).__name__}")
             return {}
         split = len(node.value) - own_count
         entries: dict[str, tuple[yaml.Node, yaml.Node]] = {}
@@ -180,6 +189,24 @@ class _Builder:
             self.keys[(*path, key)] = _mark(key_node)
             result[key] = self.build(value_node, (*path, key), stack)
         return result
+
+
+def _flat_size(node: yaml.MappingNode, sizes: dict[int, int]) -> int:
+    """How many entries `node` has once its merge keys are flattened (duplicates included, as PyYAML's
+    flatten_mapping makes them), counted without flattening: each node once, so nested merges cost no more
+    than their text. A mapping that merges itself counts as empty here (flattening it fails later)."""
+    if id(node) in sizes:
+        return sizes[id(node)]
+    sizes[id(node)] = 0
+    total = 0
+    for key, value in node.value:
+        if key.tag != MERGE_TAG:
+            total += 1
+            continue
+        sources = value.value if isinstance(value, yaml.SequenceNode) else [value]
+        total += sum(_flat_size(src, sizes) for src in sources if isinstance(src, yaml.MappingNode))
+    sizes[id(node)] = total
+    return total
 
 
 def _reader_problem(file: str, text: str, err: yaml.reader.ReaderError) -> Problem:

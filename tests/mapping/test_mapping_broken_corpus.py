@@ -20,6 +20,7 @@ RUN_AS_SUBPROCESS = (
     "empty.yaml",
     "alias_bomb.yaml",
     "non_utf8.yaml",
+    "merge_bomb.yaml",
 )
 
 
@@ -48,6 +49,7 @@ def test_the_corpus_covers_every_kind_of_mistake_and_states_its_expected_message
         "module_import_type",
         "non_utf8",
         "merge_key",
+        "merge_bomb",
     ):
         assert f"{kind}.yaml" in names
     assert all(expectations(path) for path in CORPUS)
