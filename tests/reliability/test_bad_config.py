@@ -51,6 +51,18 @@ def test_a_missing_mapping_file_stops_the_node_with_exit_code_1_and_no_traceback
     assert "Traceback" not in result.stderr + result.stdout
 
 
+def test_a_non_utf8_mapping_or_a_directory_stops_the_node_with_exit_code_1_and_a_located_error(
+    tmp_path: Path,
+):
+    result = run_node("--mapping", str(BROKEN / "non_utf8.yaml"))
+    assert result.returncode == 1
+    assert f"{BROKEN / 'non_utf8.yaml'}:4:6: the mapping file is not UTF-8 text (byte 0xe9)" in result.stderr
+    result = run_node("--mapping", str(tmp_path))
+    assert result.returncode == 1
+    assert f"{tmp_path}: the mapping file is a directory, not a regular file" in result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+
+
 def test_a_missing_start_scene_stops_the_node_with_exit_code_1_and_no_traceback():
     result = run_node("--scene", "no_such_scene.jsonc")
     assert result.returncode == 1
