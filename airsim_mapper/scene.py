@@ -11,14 +11,17 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
+import threading
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path, PurePath
 from typing import Any
 
+from airsim_mapper.files import ConfigFileError, read_config_text
 from airsim_mapper.mapping.errors import ConfigError
 
+_CLIENT_READS = threading.Lock()
 SCENE_SCHEMA = "schema/scene_config_schema.jsonc"
 ROBOT_SCHEMA = "schema/robot_config_schema.jsonc"
 
@@ -113,11 +116,10 @@ def _parse(path: Path, what: str, unreadable: bool) -> Any:
     import commentjson
 
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+        text = read_config_text(path)
+    except ConfigFileError as err:
         raise SceneError.single(
-            str(path), f"cannot read the {what}: {reason}", unreadable=unreadable
+            str(path), err.about(what), err.line, err.column, unreadable=unreadable and err.unreadable
         ) from None
     try:
         return commentjson.loads(text)
@@ -176,6 +178,30 @@ def _fast_client_schemas() -> Iterator[None]:
         client_utils.get_schema = original
 
 
+@contextlib.contextmanager
+def _checked_client_reads() -> Iterator[None]:
+    """The client's loader opens the scene, robot and environment-actor configs with the builtin `open`;
+    here it gets their text through read_config_text (regular files only, bounded, with a timeout)."""
+    import io
+
+    import projectairsim.utils as client_utils
+
+    def checked_open(path: str, mode: str = "r", *args: Any, **kwargs: Any) -> Any:
+        if mode not in ("r", "rt"):
+            return open(path, mode, *args, **kwargs)
+        try:
+            return io.StringIO(read_config_text(path))
+        except ConfigFileError as err:
+            raise SceneError.single(err.file, err.about("config file"), err.line, err.column) from None
+
+    with _CLIENT_READS:  # one reader at a time owns the patch
+        client_utils.open = checked_open
+        try:
+            yield
+        finally:
+            del client_utils.open
+
+
 def _precheck(root: Path, path: Path) -> dict[str, Any]:
     """Parse and schema-check the scene and locate its robot configs: errors name the file at fault."""
     import jsonschema
@@ -189,8 +215,9 @@ def _precheck(root: Path, path: Path) -> dict[str, Any]:
         if actor.get("type") == "robot":
             for name in _robot_config_names(actor):
                 config = contained(root, name, f"robot-config of actor '{actor['name']}'")
-                if not config.is_file():
+                if not config.exists():
                     raise SceneError.single(str(config), f"robot config of actor '{actor['name']}' not found")
+                _parse(config, f"robot config of actor '{actor['name']}'", False)
     return data
 
 
@@ -227,7 +254,7 @@ def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
     from projectairsim.utils import load_scene_config_as_dict
 
     try:
-        with _quiet_client_log(), _fast_client_schemas():
+        with _quiet_client_log(), _fast_client_schemas(), _checked_client_reads():
             data, _ = load_scene_config_as_dict(str(PurePath(scene_file)), str(root) + "/")
     except SceneError:
         raise

@@ -79,12 +79,13 @@ def resolved_yaml(spec: str) -> str:
     """The valid mapping `spec` with its extends chain merged in, as a standalone YAML mapping."""
     import yaml
 
+    from airsim_mapper.files import read_config_text
     from airsim_mapper.mapping.extends import resolved_document
     from airsim_mapper.mapping.loader import load_mapping
 
     mapping = load_mapping(spec)  # every problem first
     path = mapping_path(spec)
-    document = resolved_document(path.read_text(encoding="utf-8"), str(path))
+    document = resolved_document(read_config_text(path), str(path))
     header = f"# {described(spec)} with its extends chain merged in ({len(mapping.rules)} rules)\n"
     return header + yaml.safe_dump(document, sort_keys=False, width=110, allow_unicode=True)
 

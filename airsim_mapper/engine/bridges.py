@@ -275,8 +275,12 @@ class RosToSim(Bridge):
         """A stamped goal in another tf frame than the rule's target_frame, transformed into it."""
         target = self.spec.params.get("target_frame")
         header = getattr(ros_msg, "header", None)
-        if not target or header is None or header.frame_id in ("", target):
-            return ros_msg
+        if (
+            not target
+            or header is None
+            or header.frame_id.removeprefix("/") in ("", target.removeprefix("/"))
+        ):
+            return ros_msg  # a leading slash is ignored, as tf2 does
         return self.services.ros.transform_pose(ros_msg, target)
 
     def _on_reply(self, future: Any, params: dict) -> None:

@@ -4,7 +4,9 @@ A restarted simulator, or a scene loaded again, starts its clock from zero, so t
 publishes jumps back. ROS nodes with /use_sim_time see it: rospy.sleep and Rate.sleep raise
 ROSTimeMovedBackwardsException, a rospy.Timer made without reset=True ends for good, and tf listeners
 clear their buffers. The node cannot prevent the jump; it counts it (status `sim_time_jumps_back`), logs
-it and shows the latest on /diagnostics for a while.
+it and shows the latest on /diagnostics for a while. The stamps are those the clock bridge (a rule of ROS
+type rosgraph_msgs/Clock) publishes, so a lazy clock rule watches while /clock has a subscriber, which
+every node with /use_sim_time is.
 """
 
 from __future__ import annotations

@@ -22,6 +22,7 @@ import functools
 from pathlib import Path
 from typing import Any
 
+from airsim_mapper.files import MAX_CONFIG_BYTES, ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.origins import KeyPath, Origins, Table
@@ -79,18 +80,10 @@ def _read_base(spec: str, origins: Origins, chain: tuple[Path, ...], limits: Yam
     if len(chain) >= MAX_CHAIN:
         raise MappingError([_located(origins, ("extends",), f"extends: more than {MAX_CHAIN} bases deep")])
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
-        raise MappingError(
-            [
-                _located(
-                    origins,
-                    ("extends",),
-                    f"extends: cannot read the base mapping '{spec}' ({path}): {reason}",
-                )
-            ]
-        ) from None
+        text = read_config_text(path, limit=limits.max_bytes if limits else MAX_CONFIG_BYTES)
+    except ConfigFileError as err:
+        what = f"extends: cannot read the base mapping '{spec}' ({path}): {err.reason}"
+        raise MappingError([_located(origins, ("extends",), what)]) from None
     data, origins = _parsed(text, str(path), limits)
     return resolve(data, origins, (*chain, resolved), limits)
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from airsim_mapper.files import ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
@@ -35,11 +36,13 @@ def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
     `limits` bounds the file's size and its alias expansion (generous defaults)."""
     path = mapping_path(path)
     file = str(path)
+    limits = limits or YamlLimits()
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
-        raise MappingError.single(file, f"cannot read the mapping file: {reason}", unreadable=True) from None
+        text = read_config_text(path, limit=limits.max_bytes)
+    except ConfigFileError as err:
+        raise MappingError.single(
+            file, err.about("mapping file"), err.line, err.column, unreadable=err.unreadable
+        ) from None
     return load_mapping_text(text, file, limits)
 
 

@@ -3,7 +3,8 @@
 `load_marked(text, file)` returns plain Python data (dicts with str keys, lists, scalars) and a table from
 each value's path (a tuple of keys and indexes) to its (line, column), 1-based. Only the safe YAML tags are
 constructed; `!!python/...` tags and other unknown tags are errors. Duplicate keys and recursive aliases are
-errors too, never silently accepted.
+errors too, never silently accepted. Merge keys (`<<: *defaults`) are supported, and a mapping's own keys
+win over merged ones.
 
 Aliases are expanded into plain data, so a few hundred bytes of nested aliases ("billion laughs") could
 expand to billions of values. `YamlLimits` bounds the expansion (values built, alias expansions) and the
@@ -22,6 +23,7 @@ from airsim_mapper.mapping.errors import MappingError, Problem
 Path = tuple[Any, ...]
 MAX_DEPTH = 64
 PLAIN_COLLECTION_TAGS = ("tag:yaml.org,2002:map", "tag:yaml.org,2002:seq")
+MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
 @dataclass(frozen=True)
@@ -149,24 +151,62 @@ class _Builder:
             return None
 
     def _mapping(self, node: yaml.MappingNode, path: Path, stack: tuple[int, ...]) -> dict[str, Any]:
+        """A mapping's entries. Merge keys (`<<: *anchor`, or a list of anchors) bring in the merged
+        mappings' entries (an earlier mapping of a list wins over a later one, as in PyYAML), and the
+        mapping's own keys win over every merged one; only the own keys must be unique."""
+        own_count = sum(key.tag != MERGE_TAG for key, _value in node.value)
+        if own_count < len(node.value):
+            entries = _flat_size(node, {})
+            if entries > self.limits.max_values:
+                self.problem(
+                    node,
+                    f"merge keys expand this mapping to more than {self.limits.max_values} entries "
+                    "(a merge bomb?); nothing was loaded",
+                )
+                raise _TooLarge
         try:
-            self.loader.flatten_mapping(node)
-        except yaml.YAMLError as err:
-            self.problem(node, f"invalid YAML merge: {getattr(err, 'problem', err)}")
+            self.loader.flatten_mapping(node)  # merged pairs first, then the own ones (PyYAML's order)
+        except (yaml.YAMLError, RecursionError) as err:
+            self.problem(node, f"invalid YAML merge: {getattr(err, 'problem', None) or type(err).__name__}")
             return {}
-        result: dict[str, Any] = {}
-        for key_node, value_node in node.value:
+        split = len(node.value) - own_count
+        entries: dict[str, tuple[yaml.Node, yaml.Node]] = {}
+        own: set[str] = set()
+        for index, (key_node, value_node) in enumerate(node.value):
             if not isinstance(key_node, yaml.ScalarNode):
                 self.problem(key_node, "mapping keys must be plain scalars")
                 continue
             raw_key = self._scalar(key_node)
             key = "null" if raw_key is None else str(raw_key)
-            if key in result:
-                self.problem(key_node, f"duplicate key '{key}'")
-                continue
+            if index >= split:
+                if key in own:
+                    self.problem(key_node, f"duplicate key '{key}'")
+                    continue
+                own.add(key)
+            entries[key] = (key_node, value_node)
+        result: dict[str, Any] = {}
+        for key, (key_node, value_node) in entries.items():
             self.keys[(*path, key)] = _mark(key_node)
             result[key] = self.build(value_node, (*path, key), stack)
         return result
+
+
+def _flat_size(node: yaml.MappingNode, sizes: dict[int, int]) -> int:
+    """How many entries `node` has once its merge keys are flattened (duplicates included, as PyYAML's
+    flatten_mapping makes them), counted without flattening: each node once, so nested merges cost no more
+    than their text. A mapping that merges itself counts as empty here (flattening it fails later)."""
+    if id(node) in sizes:
+        return sizes[id(node)]
+    sizes[id(node)] = 0
+    total = 0
+    for key, value in node.value:
+        if key.tag != MERGE_TAG:
+            total += 1
+            continue
+        sources = value.value if isinstance(value, yaml.SequenceNode) else [value]
+        total += sum(_flat_size(src, sizes) for src in sources if isinstance(src, yaml.MappingNode))
+    sizes[id(node)] = total
+    return total
 
 
 def _reader_problem(file: str, text: str, err: yaml.reader.ReaderError) -> Problem:

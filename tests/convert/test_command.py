@@ -159,6 +159,15 @@ def test_desired_pose_in_an_unaccepted_frame_is_rejected():
         desired_pose(pose_stamped(frame_id="base_link"), ConvertContext())
 
 
+@pytest.mark.parametrize("frame_id", ["map", "/map"])
+def test_desired_pose_accepts_map_with_or_without_a_leading_slash_as_tf2_does(frame_id):
+    assert desired_pose(pose_stamped(frame_id=frame_id), ConvertContext())["position"]["x"] == 1.0
+    ctx = ConvertContext(params={"accepted_frames": ["/world"]})
+    assert desired_pose(pose_stamped(frame_id="world"), ctx)["position"]["x"] == 1.0
+    with pytest.raises(ConversionError, match=r"header.frame_id '//map' is not accepted"):
+        desired_pose(pose_stamped(frame_id="//map"), ConvertContext())
+
+
 def test_desired_pose_accepted_frames_come_from_params():
     ctx = ConvertContext(params={"accepted_frames": ["world"]})
     assert desired_pose(pose_stamped(frame_id="world"), ctx)["position"]["x"] == 1.0

@@ -13,12 +13,20 @@ from airsim_mapper.cli.validate import main
 
 BROKEN = Path(__file__).resolve().parent / "broken"
 CORPUS = sorted(BROKEN.glob("*.yaml"))
-RUN_AS_SUBPROCESS = ("unknown_key.yaml", "tabs.yaml", "python_tag.yaml", "empty.yaml", "alias_bomb.yaml")
+RUN_AS_SUBPROCESS = (
+    "unknown_key.yaml",
+    "tabs.yaml",
+    "python_tag.yaml",
+    "empty.yaml",
+    "alias_bomb.yaml",
+    "non_utf8.yaml",
+    "merge_bomb.yaml",
+)
 
 
 def expectations(path: Path) -> list[str]:
     """The `# expect: LINE:COL: message` lines of a corpus file, as full `FILE:LINE:COL: message` lines."""
-    lines = path.read_text().splitlines()
+    lines = path.read_bytes().decode("utf-8", "replace").splitlines()  # non_utf8.yaml is not UTF-8
     expected = [line.removeprefix("# expect: ") for line in lines if line.startswith("# expect: ")]
     return [f"{path}:{text}" for text in expected]
 
@@ -46,6 +54,10 @@ def test_the_corpus_covers_every_kind_of_mistake_and_states_its_expected_message
         "variable_cycle",
         "match_unknown_variable",
         "match_bad_glob",
+        "module_import_type",
+        "non_utf8",
+        "merge_key",
+        "merge_bomb",
     ):
         assert f"{kind}.yaml" in names
     assert all(expectations(path) for path in CORPUS)

@@ -120,3 +120,10 @@ def test_load_and_expand_raises_config_errors_whose_text_is_the_full_report(tmp_
     assert isinstance(caught.value, MappingError)
     assert str(caught.value) == f"{broken}:2:8: rules: expected array, got 3"
     assert issubclass(SceneError, ConfigError)
+
+
+def test_a_directory_given_as_mapping_exits_1_naming_it(tmp_path, capsys):
+    assert main([str(tmp_path)]) == 1
+    assert (
+        capsys.readouterr().err.strip() == f"{tmp_path}: the mapping file is a directory, not a regular file"
+    )

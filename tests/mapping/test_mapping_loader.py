@@ -201,3 +201,57 @@ def test_an_image_rule_may_bound_its_pixels_and_a_bad_bound_is_a_located_error()
     assert str(err.value) == (
         "m.yaml:14:28: rule 'cmd_vel': params.max_pixels applies only to the image converters"
     )
+
+
+def test_a_fifo_given_as_mapping_is_refused_at_once(tmp_path):
+    import os
+
+    from airsim_mapper.mapping.loader import load_mapping
+
+    fifo = tmp_path / "mapping.yaml"
+    os.mkfifo(fifo)
+    with pytest.raises(MappingError) as err:
+        load_mapping(fifo)
+    assert str(err.value) == f"{fifo}: the mapping file is a FIFO (named pipe), not a regular file"
+    assert not err.value.unreadable
+
+
+MERGED = """
+version: 1
+rules:
+  - &pose
+    name: pose
+    for_each: robot
+    direction: sim_to_ros
+    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose
+    ros: /a/<robot_name>/pose
+    type: geometry_msgs/PoseStamped
+    converter: pose
+    lazy: true
+  - <<: *pose
+    name: pose_b
+    ros: /b/<robot_name>/pose
+    lazy: false
+  - <<: [{queue_size: 5, lazy: false}, *pose]
+    name: pose_c
+    ros: /c/<robot_name>/pose
+"""
+
+
+def test_yaml_merge_keys_bring_in_an_anchor_and_the_rules_own_keys_win():
+    first, second, third = load_mapping_text(MERGED, "m.yaml").rules
+    assert (second.name, second.ros, second.converter, second.options.lazy) == (
+        "pose_b",
+        "/b/<robot_name>/pose",
+        "pose",
+        False,
+    )
+    assert first.options.lazy is True  # the anchor itself is unchanged
+    # of a list of merged mappings the earlier wins, as in PyYAML
+    assert (third.options.queue_size, third.options.lazy, third.sim) == (5, False, first.sim)
+
+
+def test_a_key_repeated_beside_a_merge_key_is_still_a_duplicate():
+    with pytest.raises(MappingError) as err:
+        load_mapping_text(MERGED + "    name: pose_d\n", "m.yaml")
+    assert str(err.value) == "m.yaml:20:5: duplicate key 'name'"

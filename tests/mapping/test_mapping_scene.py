@@ -167,3 +167,34 @@ def test_a_merged_config_without_an_id_or_with_paths_not_inlined_is_a_scene_erro
     actor = {"type": "robot", "name": "R", "robot-config": "robot.jsonc"}
     with pytest.raises(SceneError, match="actor 'R': robot-config is not inlined"):
         scene_from_config({"id": "S", "actors": [actor]}, "s.jsonc", SIM_CONFIG)
+
+
+def test_a_fifo_scene_or_robot_config_is_refused_at_once_naming_the_file(tmp_path):
+    import os
+    import shutil
+    import time
+
+    from harness import SIM_CONFIG
+
+    from airsim_mapper.scene import SceneError, read_scene
+
+    root = tmp_path / "configs"
+    shutil.copytree(SIM_CONFIG, root)
+    os.mkfifo(root / "fifo.jsonc")
+    os.mkfifo(root / "robot_fifo.jsonc")
+    scene = (root / "scene_drone_sensors.jsonc").read_text()
+    (root / "fifo_robot.jsonc").write_text(scene.replace("robot_quadrotor_sensors.jsonc", "robot_fifo.jsonc"))
+    start = time.monotonic()
+    with pytest.raises(SceneError) as caught:
+        read_scene(root, "fifo.jsonc")
+    assert (
+        str(caught.value)
+        == f"{root / 'fifo.jsonc'}: the scene file is a FIFO (named pipe), not a regular file"
+    )
+    with pytest.raises(SceneError) as caught:
+        read_scene(root, "fifo_robot.jsonc")
+    assert str(caught.value) == (
+        f"{root / 'robot_fifo.jsonc'}: the robot config of actor 'Drone1' is a FIFO (named pipe), "
+        "not a regular file"
+    )
+    assert time.monotonic() - start < 5

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -50,6 +51,18 @@ def test_a_missing_mapping_file_stops_the_node_with_exit_code_1_and_no_traceback
     assert "Traceback" not in result.stderr + result.stdout
 
 
+def test_a_non_utf8_mapping_or_a_directory_stops_the_node_with_exit_code_1_and_a_located_error(
+    tmp_path: Path,
+):
+    result = run_node("--mapping", str(BROKEN / "non_utf8.yaml"))
+    assert result.returncode == 1
+    assert f"{BROKEN / 'non_utf8.yaml'}:4:6: the mapping file is not UTF-8 text (byte 0xe9)" in result.stderr
+    result = run_node("--mapping", str(tmp_path))
+    assert result.returncode == 1
+    assert f"{tmp_path}: the mapping file is a directory, not a regular file" in result.stderr
+    assert "Traceback" not in result.stderr + result.stdout
+
+
 def test_a_missing_start_scene_stops_the_node_with_exit_code_1_and_no_traceback():
     result = run_node("--scene", "no_such_scene.jsonc")
     assert result.returncode == 1
@@ -70,6 +83,12 @@ def config_dir(tmp_path: Path) -> Path:
     )
     scene["actors"] = "not a list"
     (root / "schema_violation.jsonc").write_text(json.dumps(scene))
+    os.mkfifo(root / "fifo.jsonc")  # a FIFO with no writer: opening it for reading used to block for good
+    os.mkfifo(root / "robot_fifo.jsonc")
+    text = (root / SCENE).read_text()
+    (root / "fifo_robot.jsonc").write_text(text.replace("robot_quadrotor_sensors.jsonc", "robot_fifo.jsonc"))
+    with open(root / "big.jsonc", "wb") as big:  # sparse: 17 MiB of size, no disk
+        big.truncate(17 * 1024 * 1024)
     outside = tmp_path / "outside.jsonc"
     shutil.copy(root / SCENE, outside)
     (root / "escape.jsonc").symlink_to(outside)
@@ -92,6 +111,9 @@ def test_bad_scenes_on_load_scene_are_refused_and_the_current_scene_keeps_runnin
         str(config_dir / SCENE): "must be relative",
         "escape.jsonc": "symlink",
         "../configs/" + SCENE: "'..'",
+        "fifo.jsonc": "the scene file is a FIFO (named pipe), not a regular file",
+        "fifo_robot.jsonc": "robot config of actor 'Drone1' is a FIFO (named pipe), not a regular file",
+        "big.jsonc": "is 17825792 bytes or more, over the limit of 16777216 bytes",
     }
     sender = probe(launcher, "load", "strings", "/ProjectAirSim/node/picky/load_scene", *bad)
     wait_output(sender, "SENT", 30)

@@ -70,6 +70,7 @@ def test_a_silent_simulator_ends_the_node_with_status_1_and_a_clear_message(
     node = start_node(launcher, silent, "--scene", SCENE)
     status = node.wait(40)
     took = time.monotonic() - start
+    print(f"the node exited after {took:.1f} s")
     log = node.output()
     assert status == 1, log
     assert f"simulator at 127.0.0.1:{silent.topics}/{silent.services} {SILENT}" in log
@@ -89,6 +90,7 @@ def test_a_signal_stops_the_node_at_once_while_it_waits_for_a_silent_simulator(
         sent = time.monotonic()
         node.popen.send_signal(signal.SIGINT)
         status = node.wait(10)
+        print(f"stopped {time.monotonic() - sent:.2f} s after SIGINT")
         assert time.monotonic() - sent < 3
         assert status == 0, node.output()
     finally:
