@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import threading
 import time
@@ -405,7 +406,10 @@ class StreamingImage(SimToRos):
             was_attached = self._attached
         self._set_attached(False)
         self.active = (self.active + 1) % len(self.cameras)
-        self.topic = self.cameras[self.active]["sim"]
+        camera = self.cameras[self.active]
+        self.topic = camera["sim"]
+        if camera.get("frame_id") is not None:
+            self.ctx = dataclasses.replace(self.ctx, frame_id=camera["frame_id"])
         if was_attached:
             self._set_attached(True)
 

@@ -117,6 +117,22 @@ def test_ns_remap_and_command_line_over_parameter(rig_factory):
     assert "setting scene = 'scene_two_drones.jsonc' (command line)" in node.output()
     assert "setting namespace = 'sim2' (command line)" in node.output()
     lookup("fleet/sim2/map", "fleet/sim2/airsim_node/Drone2")
+    # The streaming image's frame follows switch_view to the other drone's camera.
+    import rospy
+    from sensor_msgs.msg import Image
+    from std_srvs.srv import Trigger
+
+    stream = "/fleet/sim2/airsim_streaming_camera"
+
+    def frame() -> str:
+        return rospy.wait_for_message(f"{stream}/image_raw", Image, timeout=20).header.frame_id
+
+    assert frame() == "fleet/sim2/airsim_node/Drone1/FrontCamera/scene_camera"
+    rospy.wait_for_service(f"{stream}/switch_view", timeout=10)
+    assert rospy.ServiceProxy(f"{stream}/switch_view", Trigger)().success
+    wait_until(
+        lambda: frame() == "fleet/sim2/airsim_node/Drone2/FrontCamera/scene_camera", 20, what="the new frame"
+    )
     node.stop()
 
 

@@ -112,7 +112,7 @@ def test_hello_ros_flies_to_the_ball_while_the_bridge_publishes(rig_factory):
     assert mission.alive()
     mission.stop()
     assert mission.popen.returncode == 0, mission.output()
-    assert unexpected_tracebacks(mission.output()) == []
+    assert "Traceback" not in mission.output(), mission.output()  # Ctrl-C exits cleanly, pynng included
 
 
 def unexpected_tracebacks(output: str) -> list[str]:
