@@ -40,6 +40,7 @@ class BridgeStats:
     last_stamp: Any = None  # header stamp (rospy.Time) of the last published message
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
+    stale_dropped: int = 0  # messages taken before a lazy bridge attached (the simulator's cached frame)
 
 
 class Throttled:
@@ -122,6 +123,8 @@ class SimToRos(Bridge):
         self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
         self._last_publish = -1e9
         self.topic = spec.sim
+        # Lazy and "fresh": after attaching, messages taken before this simulator time (ns) are dropped.
+        self._fresh_after = 0
 
     @property
     def lazy(self) -> bool:
@@ -155,12 +158,16 @@ class SimToRos(Bridge):
                 return
             self._attached = attached
             if attached:
+                if self.lazy and self.spec.options.first_message == "fresh":
+                    self._fresh_after = self.services.hub.sim_now()
                 self.services.hub.attach(self.topic, self.handle)
             else:
                 self.services.hub.detach(self.topic, self.handle)
 
     def handle(self, message: Any) -> list | None:
         """Convert one sim message, publish it; return the transforms it produces."""
+        if self._fresh_after and self._stale(message):
+            return None
         now = time.monotonic()
         if self._min_period and now - self._last_publish < self._min_period:
             return None
@@ -191,6 +198,16 @@ class SimToRos(Bridge):
         except (ConversionError, KeyError, TypeError, AttributeError) as exc:  # no usable pose in it
             self.fail(f"no transform from a message on {self.topic}: {type(exc).__name__}: {exc}")
             return None
+
+    def _stale(self, message: Any) -> bool:
+        """A message taken before the bridge attached (the simulator's cached last frame): dropped and
+        counted. The first message taken since ends the check."""
+        stamp = message.get("time_stamp") if isinstance(message, dict) else None
+        if isinstance(stamp, int) and stamp < self._fresh_after:
+            self.stats.stale_dropped += 1
+            return True
+        self._fresh_after = 0
+        return False
 
     def _transform(self, out: Any, message: Any) -> Any:
         tf = self.spec.tf

@@ -19,7 +19,16 @@ from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
 from airsim_mapper.resources import mapping_path
 
 DEFAULT_IMAGE_TYPES: dict[int, str] = dict(DOCUMENTED_IMAGE_TYPES)
-OPTION_KEYS = ("queue_size", "latch", "lazy", "rate_limit_hz", "stamp", "enabled", "watchdog_s")
+OPTION_KEYS = (
+    "queue_size",
+    "latch",
+    "lazy",
+    "rate_limit_hz",
+    "stamp",
+    "first_message",
+    "enabled",
+    "watchdog_s",
+)
 LIMIT_KEYS = ("max_linear_speed", "max_vertical_speed", "max_yaw_rate", "position_box", "on_violation")
 
 

@@ -216,3 +216,39 @@ def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame
         sub.unregister()
         pub.unregister()
     node.stop()
+
+
+def test_a_lazy_stream_s_first_message_is_taken_after_the_subscription(rig_factory):
+    """rostopic echo -n1 / wait_for_message get a current frame, not the simulator's cached one."""
+    import rospy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import Image, PointCloud2
+
+    rig = rig_factory()
+    robot = "/airsim_node/Drone1"
+    rig.start_node("--scene", SENSORS, node_name="fresh_bridge", wait_for=f"{robot}/actual_pose")
+    streams = (
+        (f"{robot}/DownCamera/scene_camera/image", Image, "camera_image[Drone1/DownCamera/scene_camera]"),
+        (f"{robot}/lidar1/lidar", PointCloud2, "lidar[Drone1/lidar1]"),
+    )
+    for topic, cls, _ in streams:
+        rospy.wait_for_message(topic, cls, timeout=20)  # the simulator now holds a frame of this time
+    time.sleep(3.0)  # simulated time goes on; the cached frames stay behind
+    for topic, cls, _ in streams:
+        before = rospy.wait_for_message(f"{robot}/actual_pose", PoseStamped, timeout=10).header.stamp
+        first = rospy.wait_for_message(topic, cls, timeout=20).header.stamp
+        assert first >= before, (
+            f"{topic}: first message {(before - first).to_sec():.2f} s older than the subscription"
+        )
+    names = {f"fresh_bridge: {name}" for _, _, name in streams}
+    dropped: dict[str, int] = {}
+
+    def counted() -> bool:
+        for status in rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=10).status:
+            if status.name in names:
+                dropped[status.name] = int({kv.key: kv.value for kv in status.values}["stale_dropped"])
+        return len(dropped) == len(names) and all(v >= 1 for v in dropped.values())
+
+    wait_until(counted, 10, what=f"stale frames counted in /diagnostics ({dropped})")
+    rig.node.stop()

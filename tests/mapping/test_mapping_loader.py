@@ -171,3 +171,11 @@ def test_a_type_naming_an_installed_module_that_is_no_message_package_is_refused
     with pytest.raises(MappingError, match=r"'trap_pkg' is not a ROS message package"):
         load_mapping_text(text, "m.yaml")
     assert not ran.exists()
+
+
+def test_first_message_is_fresh_by_default_and_a_rule_may_keep_the_cached_one():
+    text = CMD_VEL.replace("    enabled: false\n", "    first_message: cached\n")
+    cmd, pose = load_mapping_text(text, "m.yaml").rules
+    assert (cmd.options.first_message, pose.options.first_message) == ("fresh", "cached")
+    with pytest.raises(MappingError, match="first_message"):
+        load_mapping_text(text.replace("first_message: cached", "first_message: stale"), "m.yaml")
