@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 
+import pytest
 from bridgeharness import wait_topic
 from harness import Child, wait_until
 
@@ -127,11 +128,13 @@ def test_ns_remap_and_command_line_over_parameter(rig_factory):
     def frame() -> str:
         return rospy.wait_for_message(f"{stream}/image_raw", Image, timeout=20).header.frame_id
 
-    assert frame() == "fleet/sim2/airsim_node/Drone1/FrontCamera/scene_camera"
+    assert frame() == "fleet/sim2/airsim_node/Drone1/FrontCamera/scene_camera_optical"
     rospy.wait_for_service(f"{stream}/switch_view", timeout=10)
     assert rospy.ServiceProxy(f"{stream}/switch_view", Trigger)().success
     wait_until(
-        lambda: frame() == "fleet/sim2/airsim_node/Drone2/FrontCamera/scene_camera", 20, what="the new frame"
+        lambda: frame() == "fleet/sim2/airsim_node/Drone2/FrontCamera/scene_camera_optical",
+        20,
+        what="the new frame",
     )
     node.stop()
 
@@ -252,3 +255,55 @@ def test_a_lazy_stream_s_first_message_is_taken_after_the_subscription(rig_facto
 
     wait_until(counted, 10, what=f"stale frames counted in /diagnostics ({dropped})")
     rig.node.stop()
+
+
+BALL_NED = (20.0, 20.0, -3.0)  # the default world's orange ball (centre), BGR (0, 140, 255), radius 1 m
+
+
+@pytest.mark.parametrize("mapping", ["default", "enu"])
+def test_the_ball_projects_onto_its_pixels_through_the_image_s_optical_frame(rig_factory, mapping):
+    """As image_geometry would: the ball's centre looked up in the image's frame with tf2, projected with
+    camera_info's P, lands on the ball's orange pixels (the Chase camera from the drone's start pose sees
+    the ball up and to the right)."""
+    import math
+
+    import numpy as np
+    import rospy
+    import tf2_geometry_msgs
+    import tf2_ros
+    from geometry_msgs.msg import PointStamped
+    from sensor_msgs.msg import CameraInfo, Image
+
+    rig = rig_factory()
+    camera = "/airsim_node/Drone1/Chase/scene_camera"
+    node = rig.start_node(
+        "--mapping", mapping, "--scene", SENSORS, node_name=f"optical_{mapping}", wait_for=f"{camera}/image"
+    )
+    buffer = tf2_ros.Buffer()
+    listener = tf2_ros.TransformListener(buffer)
+    try:
+        rospy.wait_for_message(f"{camera}/image", Image, timeout=20)
+        time.sleep(1.0)  # the drone settles on its start pose
+        image = rospy.wait_for_message(f"{camera}/image", Image, timeout=20)
+        info = rospy.wait_for_message(f"{camera}/camera_info", CameraInfo, timeout=20)
+        tf = buffer.lookup_transform(image.header.frame_id, "map", image.header.stamp, rospy.Duration(10))
+    finally:
+        listener.unregister()
+    assert image.header.frame_id == info.header.frame_id
+    assert image.header.frame_id.endswith("Chase/scene_camera_optical")
+    ball = PointStamped()
+    ball.header.frame_id = "map"
+    x, y, z = BALL_NED
+    ball.point.x, ball.point.y, ball.point.z = (y, x, -z) if mapping == "enu" else (x, y, z)
+    point = tf2_geometry_msgs.do_transform_point(ball, tf).point
+    assert point.z > 0  # in front of the camera
+    u, v, w = np.array(info.P).reshape(3, 4) @ np.array([point.x, point.y, point.z, 1.0])
+    u, v = u / w, v / w
+    pixels = np.frombuffer(image.data, np.uint8).reshape(image.height, image.width, 3)  # bgr8
+    b, g, r = (pixels[..., i].astype(float) for i in range(3))
+    orange = (r > 60) & (b < 0.25 * r) & (g > 0.35 * r) & (g < 0.75 * r)  # lit side or shaded side
+    rows, cols = np.nonzero(orange)
+    assert len(rows) > 20, "the ball is not in the image"
+    assert math.dist((u, v), (cols.mean(), rows.mean())) < 3.0, ((u, v), (cols.mean(), rows.mean()))
+    assert orange[round(v), round(u)]
+    node.stop()
