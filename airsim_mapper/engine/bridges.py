@@ -72,6 +72,8 @@ class Services:
     shared: MutableMapping[Any, Any]
     node_action: Callable[[BridgeSpec, dict], Any]  # load_scene and other engine-level actions
     frames: TfLookup = field(default_factory=TfLookup)  # goals in other tf frames
+    # Per ROS topic, what its engine action (load_scene) last acted on: outlives a re-created subscriber.
+    replays: dict[str, LatchedReplays] = field(default_factory=dict)
 
 
 def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
@@ -237,7 +239,9 @@ class RosToSim(Bridge):
         self.pending: Any = None
         # An engine action (load_scene) acts once per message: a latched message replayed on a new
         # connection is ignored.
-        self.replays = LatchedReplays() if spec.sim_kind not in ("topic", "service") else None
+        self.replays = None
+        if spec.sim_kind not in ("topic", "service"):
+            self.replays = services.replays.setdefault(spec.ros, LatchedReplays())
 
     def start(self) -> None:
         self.subscriber = rospy.Subscriber(

@@ -307,3 +307,35 @@ def test_the_ball_projects_onto_its_pixels_through_the_image_s_optical_frame(rig
     assert math.dist((u, v), (cols.mean(), rows.mean())) < 3.0, ((u, v), (cols.mean(), rows.mean()))
     assert orange[round(v), round(u)]
     node.stop()
+
+
+def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_session):
+    """In this process: a load_scene runner re-created on the same engine services gets the latched message
+    again on its new connection and does not act on it; the same name published again is acted on."""
+    import rospy
+    from std_msgs.msg import String
+
+    from airsim_mapper.engine.bridges import RosToSim, Services
+    from airsim_mapper.mapping.expand import expand
+    from airsim_mapper.mapping.loader import load_mapping
+
+    (spec,) = expand(load_mapping("default"), None, "replay_probe")
+    actions: list[str] = []
+    services = Services(None, None, None, {}, lambda _spec, params: actions.append(params["scene"]))
+    publisher = rospy.Publisher(spec.ros, String, queue_size=1, latch=True)
+    publisher.publish(String(SENSORS))
+    bridge = RosToSim(spec, services)
+    bridge.start()
+    try:
+        wait_until(lambda: actions == [SENSORS], 10, what="the first load")
+        bridge.stop()
+        bridge = RosToSim(spec, services)  # a new subscriber: the latched message arrives again
+        bridge.start()
+        wait_until(lambda: publisher.get_num_connections() == 1, 10, what="the new connection")
+        time.sleep(2.0)
+        assert actions == [SENSORS]
+        publisher.publish(String(SENSORS))  # on purpose, again
+        wait_until(lambda: actions == [SENSORS, SENSORS], 10, what="the deliberate reload")
+    finally:
+        bridge.stop()
+        publisher.unregister()
