@@ -41,15 +41,19 @@ class WrapperError(RuntimeError):
 
 
 def redirect_client_log() -> None:
-    """Send the projectairsim client's log records to `rosout.projectairsim` (console and /rosout)."""
+    """Send the projectairsim client's log records to `rosout.projectairsim` (console and /rosout), as far
+    as that logger's level lets them through."""
     from projectairsim.utils import projectairsim_log
 
     client_log = projectairsim_log()
     if any(getattr(f, "airsim_mapper", False) for f in client_log.filters):
         return
 
+    target = logging.getLogger("rosout.projectairsim")
+
     def _redirect(record: logging.LogRecord) -> bool:
-        logging.getLogger("rosout.projectairsim").handle(record)
+        if target.isEnabledFor(record.levelno):  # handle() alone would ignore the logger's level
+            target.handle(record)
         return False
 
     _redirect.airsim_mapper = True  # type: ignore[attr-defined]

@@ -43,14 +43,18 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 async def mission(drone, target: tuple[float, float, float], speed: float) -> None:
-    """Take off, then shuttle between the launch pad and the ball forever."""
+    """Take off, then shuttle between the launch pad and the ball until ROS shuts down."""
+    import rospy
+
     drone.enable_api_control()
     drone.arm()
     await (await drone.takeoff_async())
     home = (0.0, 0.0, target[2])
     legs = 0
-    while True:
+    while not rospy.is_shutdown():
         for x, y, z in (target, home):
+            if rospy.is_shutdown():  # a pre-empted move returned: start no new one
+                return
             log.info("flying to (%.1f, %.1f, %.1f)", x, y, z)
             await (await drone.move_to_position_async(north=x, east=y, down=z, velocity=speed))
             legs += 1
@@ -72,16 +76,32 @@ async def main(client, bridge, drone, hover_method: str, args: argparse.Namespac
             rospy.signal_shutdown("mission time is up")
             break
         await asyncio.sleep(0.2)  # yield to the mission between checks
-    task.cancel()
-    # Hover pre-empts the running move: the simulator answers its pending request (false), so the
-    # cancelled mission finishes cleanly, and the drone holds its position.
+    # Hover pre-empts the running move: the simulator answers its pending request (false) and the mission,
+    # seeing ROS shut down, starts no other. So no request is left pending when the sockets close (the
+    # client would log its ConnectionReset with a traceback), and the drone holds its position.
     with contextlib.suppress(Exception):
         client.request({"method": f"{hover_method}", "params": {}, "version": 1.0})
-    await asyncio.wait({task}, timeout=2.0)
+    others = asyncio.all_tasks() - {asyncio.current_task()}  # the mission and the client's request tasks
+    if others:
+        await asyncio.wait(others, timeout=3.0)
+    task.cancel()
     bridge.shutdown()
-    # Closing the client's sockets ends the mission's pending request, so the cancelled task can finish.
     client.disconnect()
     await asyncio.wait({task}, timeout=5)
+
+
+def quiet_closed_contexts() -> None:
+    """pynng prints "Exception ignored in Context.__del__ ... Closed" for each request context collected
+    after the client closed its socket: harmless at exit, so not printed; anything else still is."""
+    from pynng.exceptions import Closed
+
+    default = sys.unraisablehook
+
+    def hook(unraisable) -> None:
+        if not isinstance(unraisable.exc_value, Closed):
+            default(unraisable)
+
+    sys.unraisablehook = hook
 
 
 def run(argv: list[str]) -> int:
@@ -93,6 +113,7 @@ def run(argv: list[str]) -> int:
     args = parse_args(rospy.myargv(argv)[1:])
     rospy.init_node(args.nodename or "projectairsim", anonymous=args.nodename is None)
     redirect_client_log()
+    quiet_closed_contexts()
     client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
     client.connect()
     try:

@@ -7,6 +7,7 @@ alone, so adding a converter touches the catalogue and its own module, never thi
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import threading
 import time
@@ -36,6 +37,7 @@ class BridgeStats:
     last_stamp: Any = None  # header stamp (a genpy Time) of the last published message
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
+    stale_dropped: int = 0  # messages taken before a lazy bridge attached (the simulator's cached frame)
 
 
 class Throttled:
@@ -69,6 +71,8 @@ class Services:
     streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
     counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
     sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # /clock going backwards
+    # Per ROS topic, what its engine action (load_scene) last acted on: outlives a re-created subscriber.
+    replays: dict[str, LatchedReplays] = field(default_factory=dict)
 
 
 def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
@@ -127,6 +131,8 @@ class SimToRos(Bridge):
         self._last_publish = -1e9
         self.topic = spec.sim
         self._is_clock = spec.ros_type == "rosgraph_msgs/Clock"  # what /use_sim_time nodes follow
+        # Lazy and "fresh": after attaching, messages taken before this simulator time (ns) are dropped.
+        self._fresh_after = 0
 
     @property
     def lazy(self) -> bool:
@@ -160,12 +166,16 @@ class SimToRos(Bridge):
                 return
             self._attached = attached
             if attached:
+                if self.lazy and self.spec.options.first_message == "fresh":
+                    self._fresh_after = self.services.hub.sim_now()
                 self.services.hub.attach(self.topic, self.handle)
             else:
                 self.services.hub.detach(self.topic, self.handle)
 
     def handle(self, message: Any) -> list | None:
         """Convert one sim message, publish it; return the transforms it produces."""
+        if self._fresh_after and self._stale(message):
+            return None
         now = time.monotonic()
         if self._min_period and now - self._last_publish < self._min_period:
             return None
@@ -201,6 +211,16 @@ class SimToRos(Bridge):
             self.fail(f"no transform from a message on {self.topic}: {type(exc).__name__}: {exc}")
             return None
 
+    def _stale(self, message: Any) -> bool:
+        """A message taken before the bridge attached (the simulator's cached last frame): dropped and
+        counted. The first message taken since ends the check."""
+        stamp = message.get("time_stamp") if isinstance(message, dict) else None
+        if isinstance(stamp, int) and stamp < self._fresh_after:
+            self.stats.stale_dropped += 1
+            return True
+        self._fresh_after = 0
+        return False
+
     def _transform(self, out: Any, message: Any) -> Any:
         tf = self.spec.tf
         if hasattr(out, "pose") and hasattr(out.pose, "position"):  # a PoseStamped output
@@ -229,7 +249,9 @@ class RosToSim(Bridge):
         self.pending: Any = None
         # An engine action (load_scene) acts once per message: a latched message replayed on a new
         # connection is ignored.
-        self.replays = LatchedReplays() if self.info.runner == catalog.ACTION else None
+        self.replays = None
+        if self.info.runner == catalog.ACTION:
+            self.replays = services.replays.setdefault(spec.ros, LatchedReplays())
 
     def start(self) -> None:
         self.subscriber = self.services.ros.subscriber(
@@ -417,7 +439,10 @@ class StreamingImage(SimToRos):
             was_attached = self._attached
         self._set_attached(False)
         self.active = (self.active + 1) % len(self.cameras)
-        self.topic = self.cameras[self.active]["sim"]
+        camera = self.cameras[self.active]
+        self.topic = camera["sim"]
+        if camera.get("frame_id") is not None:
+            self.ctx = dataclasses.replace(self.ctx, frame_id=camera["frame_id"])
         if was_attached:
             self._set_attached(True)
 

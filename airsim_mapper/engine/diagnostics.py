@@ -48,6 +48,7 @@ def bridge_status(bridge: Bridge, seen: _Seen, now: float, drops: int, prefix: s
         "messages": str(stats.messages),
         "errors": str(stats.errors),
         "drops": str(drops),
+        "stale_dropped": str(stats.stale_dropped),  # the simulator's cached frames at subscription
         "last_message_age_s": "" if age is None else f"{age:.3f}",
     }
     return {"name": f"{prefix}{spec.name}", "level": level, "message": message, "values": values}

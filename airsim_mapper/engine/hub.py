@@ -41,6 +41,13 @@ class StreamHub:
         self._sim.unsubscribe(topic, stream.offer)
         stream.stop()
 
+    def sim_now(self) -> int:
+        """The simulator's time as far as the streams know it: the newest time_stamp (ns) seen on any
+        (0 before any)."""
+        with self._lock:
+            streams = list(self._streams.values())
+        return max((s.stats.newest_stamp for s in streams), default=0)
+
     def streams(self) -> dict[str, Stream]:
         with self._lock:
             return dict(self._streams)

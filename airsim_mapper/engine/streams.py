@@ -29,6 +29,7 @@ class StreamStats:
     handled: int = 0
     errors: int = 0
     last_receive: float = 0.0  # time.monotonic() of the newest message
+    newest_stamp: int = 0  # the largest time_stamp (simulator ns) seen on the topic
     # Peaks since the last `take_peaks()` (seconds): they tell where a stall came from.
     arrival_gap_max: float = 0.0  # between two arrivals: the simulator, the wire or the receive loop
     wait_max: float = 0.0  # a message waiting in the slot for the worker: scheduling, the GIL
@@ -71,6 +72,9 @@ class Stream:
                 stats.arrival_gap_max = max(stats.arrival_gap_max, now - stats.last_receive)
             stats.received += 1
             stats.last_receive = now
+            stamp = message.get("time_stamp") if type(message) is dict else None
+            if type(stamp) is int and stamp > stats.newest_stamp:
+                stats.newest_stamp = stamp
             if self._has_pending:
                 stats.dropped += 1
             self._pending = message

@@ -11,7 +11,8 @@ then their sensors, then capture settings). Domains:
   source = the capture setting plus the camera mount under "camera_origin";
 - streaming_camera: once per scene when a capture-enabled image-type 0 setting has "streaming-enabled": true,
   `<rule>[<scene_name>]`; robot_name/camera_name are the first streaming camera's, and source["cameras"] lists
-  every streaming camera as {"robot_name", "camera_name", "sim": its scene_camera topic path};
+  every streaming camera as {"robot_name", "camera_name", "sim": its scene_camera topic path, "frame_id": the
+  rule's frame_id for that camera (with a frame_id)};
 - lidar, radar, imu, gps, barometer, magnetometer, distance_sensor, battery, airspeed: per enabled sensor of
   that type, `<rule>[<robot>/<sensor>]`, source = the sensor config.
 """
@@ -172,6 +173,10 @@ def expand(
         for key, variables, source in elements(rule, mapping, scene, node_name, namespace):
             if rule.match and not matches(rule.match, variables):
                 continue
+            if rule.domain == "streaming_camera" and rule.frame_id is not None:
+                for camera in source["cameras"]:  # the frame follows the active camera (switch_view)
+                    names = {k: camera[k] for k in ("robot_name", "camera_name")}
+                    camera["frame_id"] = template.render(rule.frame_id, {**variables, **names})
             bridge = _bridge(rule, key, variables, source)
             if bridge.ros is not None:
                 why = ros_name_problem(bridge.ros)

@@ -74,6 +74,7 @@ class Options:
     lazy: bool = True
     rate_limit_hz: float | None = None
     stamp: str = "sim"  # "sim" (simulator time stamp) or "ros" (rospy.Time.now())
+    first_message: str = "fresh"  # lazy: "fresh" drops the simulator's cached frame; "cached" keeps it
     enabled: bool = True
     watchdog_s: float | None = None  # ros_to_sim: act when no message arrives for this long
     limits: Limits = field(default_factory=Limits)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 
+import pytest
 from bridgeharness import wait_topic
 from harness import Child, wait_until
 
@@ -117,6 +118,24 @@ def test_ns_remap_and_command_line_over_parameter(rig_factory):
     assert "setting scene = 'scene_two_drones.jsonc' (command line)" in node.output()
     assert "setting namespace = 'sim2' (command line)" in node.output()
     lookup("fleet/sim2/map", "fleet/sim2/airsim_node/Drone2")
+    # The streaming image's frame follows switch_view to the other drone's camera.
+    import rospy
+    from sensor_msgs.msg import Image
+    from std_srvs.srv import Trigger
+
+    stream = "/fleet/sim2/airsim_streaming_camera"
+
+    def frame() -> str:
+        return rospy.wait_for_message(f"{stream}/image_raw", Image, timeout=20).header.frame_id
+
+    assert frame() == "fleet/sim2/airsim_node/Drone1/FrontCamera/scene_camera_optical"
+    rospy.wait_for_service(f"{stream}/switch_view", timeout=10)
+    assert rospy.ServiceProxy(f"{stream}/switch_view", Trigger)().success
+    wait_until(
+        lambda: frame() == "fleet/sim2/airsim_node/Drone2/FrontCamera/scene_camera_optical",
+        20,
+        what="the new frame",
+    )
     node.stop()
 
 
@@ -200,3 +219,124 @@ def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame
         sub.unregister()
         pub.unregister()
     node.stop()
+
+
+def test_a_lazy_stream_s_first_message_is_taken_after_the_subscription(rig_factory):
+    """rostopic echo -n1 / wait_for_message get a current frame, not the simulator's cached one."""
+    import rospy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import Image, PointCloud2
+
+    rig = rig_factory()
+    robot = "/airsim_node/Drone1"
+    rig.start_node("--scene", SENSORS, node_name="fresh_bridge", wait_for=f"{robot}/actual_pose")
+    streams = (
+        (f"{robot}/DownCamera/scene_camera/image", Image, "camera_image[Drone1/DownCamera/scene_camera]"),
+        (f"{robot}/lidar1/lidar", PointCloud2, "lidar[Drone1/lidar1]"),
+    )
+    for topic, cls, _ in streams:
+        rospy.wait_for_message(topic, cls, timeout=20)  # the simulator now holds a frame of this time
+    time.sleep(3.0)  # simulated time goes on; the cached frames stay behind
+    for topic, cls, _ in streams:
+        before = rospy.wait_for_message(f"{robot}/actual_pose", PoseStamped, timeout=10).header.stamp
+        first = rospy.wait_for_message(topic, cls, timeout=20).header.stamp
+        assert first >= before, (
+            f"{topic}: first message {(before - first).to_sec():.2f} s older than the subscription"
+        )
+    names = {f"fresh_bridge: {name}" for _, _, name in streams}
+    dropped: dict[str, int] = {}
+
+    def counted() -> bool:
+        for status in rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=10).status:
+            if status.name in names:
+                dropped[status.name] = int({kv.key: kv.value for kv in status.values}["stale_dropped"])
+        return len(dropped) == len(names) and all(v >= 1 for v in dropped.values())
+
+    wait_until(counted, 10, what=f"stale frames counted in /diagnostics ({dropped})")
+    rig.node.stop()
+
+
+BALL_NED = (20.0, 20.0, -3.0)  # the default world's orange ball (centre), BGR (0, 140, 255), radius 1 m
+
+
+@pytest.mark.parametrize("mapping", ["default", "enu"])
+def test_the_ball_projects_onto_its_pixels_through_the_image_s_optical_frame(rig_factory, mapping):
+    """As image_geometry would: the ball's centre looked up in the image's frame with tf2, projected with
+    camera_info's P, lands on the ball's orange pixels (the Chase camera from the drone's start pose sees
+    the ball up and to the right)."""
+    import math
+
+    import numpy as np
+    import rospy
+    import tf2_geometry_msgs
+    import tf2_ros
+    from geometry_msgs.msg import PointStamped
+    from sensor_msgs.msg import CameraInfo, Image
+
+    rig = rig_factory()
+    camera = "/airsim_node/Drone1/Chase/scene_camera"
+    node = rig.start_node(
+        "--mapping", mapping, "--scene", SENSORS, node_name=f"optical_{mapping}", wait_for=f"{camera}/image"
+    )
+    buffer = tf2_ros.Buffer()
+    listener = tf2_ros.TransformListener(buffer)
+    try:
+        rospy.wait_for_message(f"{camera}/image", Image, timeout=20)
+        time.sleep(1.0)  # the drone settles on its start pose
+        image = rospy.wait_for_message(f"{camera}/image", Image, timeout=20)
+        info = rospy.wait_for_message(f"{camera}/camera_info", CameraInfo, timeout=20)
+        tf = buffer.lookup_transform(image.header.frame_id, "map", image.header.stamp, rospy.Duration(10))
+    finally:
+        listener.unregister()
+    assert image.header.frame_id == info.header.frame_id
+    assert image.header.frame_id.endswith("Chase/scene_camera_optical")
+    ball = PointStamped()
+    ball.header.frame_id = "map"
+    x, y, z = BALL_NED
+    ball.point.x, ball.point.y, ball.point.z = (y, x, -z) if mapping == "enu" else (x, y, z)
+    point = tf2_geometry_msgs.do_transform_point(ball, tf).point
+    assert point.z > 0  # in front of the camera
+    u, v, w = np.array(info.P).reshape(3, 4) @ np.array([point.x, point.y, point.z, 1.0])
+    u, v = u / w, v / w
+    pixels = np.frombuffer(image.data, np.uint8).reshape(image.height, image.width, 3)  # bgr8
+    b, g, r = (pixels[..., i].astype(float) for i in range(3))
+    orange = (r > 60) & (b < 0.25 * r) & (g > 0.35 * r) & (g < 0.75 * r)  # lit side or shaded side
+    rows, cols = np.nonzero(orange)
+    assert len(rows) > 20, "the ball is not in the image"
+    assert math.dist((u, v), (cols.mean(), rows.mean())) < 3.0, ((u, v), (cols.mean(), rows.mean()))
+    assert orange[round(v), round(u)]
+    node.stop()
+
+
+def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_session):
+    """In this process: a load_scene runner re-created on the same engine services gets the latched message
+    again on its new connection and does not act on it; the same name published again is acted on."""
+    import rospy
+    from std_msgs.msg import String
+
+    from airsim_mapper.engine.bridges import RosToSim, Services
+    from airsim_mapper.engine.ros_link import RosLink
+    from airsim_mapper.mapping.expand import expand
+    from airsim_mapper.mapping.loader import load_mapping
+
+    (spec,) = expand(load_mapping("default"), None, "replay_probe")
+    actions: list[str] = []
+    services = Services(None, None, RosLink(), {}, lambda _action, params: actions.append(params["scene"]))
+    publisher = rospy.Publisher(spec.ros, String, queue_size=1, latch=True)
+    publisher.publish(String(SENSORS))
+    bridge = RosToSim(spec, services)
+    bridge.start()
+    try:
+        wait_until(lambda: actions == [SENSORS], 10, what="the first load")
+        bridge.stop()
+        bridge = RosToSim(spec, services)  # a new subscriber: the latched message arrives again
+        bridge.start()
+        wait_until(lambda: publisher.get_num_connections() == 1, 10, what="the new connection")
+        time.sleep(2.0)
+        assert actions == [SENSORS]
+        publisher.publish(String(SENSORS))  # on purpose, again
+        wait_until(lambda: actions == [SENSORS, SENSORS], 10, what="the deliberate reload")
+    finally:
+        bridge.stop()
+        publisher.unregister()

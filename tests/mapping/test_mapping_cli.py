@@ -15,14 +15,14 @@ from airsim_mapper.scene import SceneError
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
 # bridges for scene_drone_sensors.jsonc: the project's sensor drone also has radar1 (detections, tracks, tf)
-SENSORS_SCENE_BRIDGES = {SIM_CONFIG: 65, EXAMPLE_CONFIG: 62}
+SENSORS_SCENE_BRIDGES = {SIM_CONFIG: 73, EXAMPLE_CONFIG: 70}
 
 
 def test_a_valid_mapping_without_a_scene_exits_0_and_lists_its_rules(capsys):
     assert main([str(DEFAULT)]) == 0
     out = capsys.readouterr().out
     assert "/airsim_node/<robot_name>/<camera_name>/<image_type>/image" in out
-    assert out.rstrip().endswith("valid, 42 rules")
+    assert out.rstrip().endswith("valid, 43 rules")
 
 
 @pytest.mark.live
@@ -107,7 +107,7 @@ def test_a_missing_scene_file_exits_2_and_an_invalid_scene_exits_1(tmp_path, cap
 
 def test_load_and_expand_returns_the_mapping_scene_and_bridges():
     mapping, scene, bridges = load_and_expand(DEFAULT, "scene_basic_drone.jsonc", SIM_CONFIG, "n1", "")
-    assert (len(mapping.rules), scene.name, bridges[0].name) == (42, "SceneBasicDrone", "load_scene[n1]")
+    assert (len(mapping.rules), scene.name, bridges[0].name) == (43, "SceneBasicDrone", "load_scene[n1]")
     table = format_table(bridges)
     assert len(table.splitlines()) == len(bridges) + 1
 

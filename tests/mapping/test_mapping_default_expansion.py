@@ -275,7 +275,7 @@ def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sens
     )
     normals = by_ros["/airsim_node/Drone1/DownCamera/surface_normals/image"]
     assert normals.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/surface_normals_camera"
-    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals"
+    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals_optical"  # REP 103 (#19)
     info = by_ros["/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info"]
     assert info.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/disparity_normalized_camera"
     lidar = by_ros["/airsim_node/Drone1/lidar1/lidar"]
@@ -302,10 +302,13 @@ def test_default_mapping_broadcasts_one_camera_frame_per_capture_enabled_image_t
 ):
     bridges = expand(default_mapping, read_scene(sim_config, "scene_basic_drone.jsonc"), "projectairsim")
     children = sorted(bridge.tf.child for bridge in bridges if bridge.ros is None)
-    assert children == [
+    assert children == [  # the documented camera frame and its optical child
         "airsim_node/Drone1/Chase/scene_camera",
+        "airsim_node/Drone1/Chase/scene_camera_optical",
         "airsim_node/Drone1/DownCamera/depth_camera",
+        "airsim_node/Drone1/DownCamera/depth_camera_optical",
         "airsim_node/Drone1/DownCamera/scene_camera",
+        "airsim_node/Drone1/DownCamera/scene_camera_optical",
     ]
 
 

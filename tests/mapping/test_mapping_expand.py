@@ -113,8 +113,18 @@ def test_the_streaming_camera_domain_expands_once_and_lists_every_streaming_came
     (bridge,) = expand(load_mapping_text(text), scene, "n")
     assert bridge.frame_id == "R1/Front"
     assert bridge.source["cameras"] == [
-        {"robot_name": "R1", "camera_name": "Front", "sim": "/Sim/S/robots/R1/sensors/Front/scene_camera"},
-        {"robot_name": "R2", "camera_name": "Back", "sim": "/Sim/S/robots/R2/sensors/Back/scene_camera"},
+        {
+            "robot_name": "R1",
+            "camera_name": "Front",
+            "sim": "/Sim/S/robots/R1/sensors/Front/scene_camera",
+            "frame_id": "R1/Front",
+        },
+        {
+            "robot_name": "R2",
+            "camera_name": "Back",
+            "sim": "/Sim/S/robots/R2/sensors/Back/scene_camera",
+            "frame_id": "R2/Back",  # the frame switch_view moves the stream to
+        },
     ]
 
 

@@ -255,3 +255,11 @@ def test_a_key_repeated_beside_a_merge_key_is_still_a_duplicate():
     with pytest.raises(MappingError) as err:
         load_mapping_text(MERGED + "    name: pose_d\n", "m.yaml")
     assert str(err.value) == "m.yaml:20:5: duplicate key 'name'"
+
+
+def test_first_message_is_fresh_by_default_and_a_rule_may_keep_the_cached_one():
+    text = CMD_VEL.replace("    enabled: false\n", "    first_message: cached\n")
+    cmd, pose = load_mapping_text(text, "m.yaml").rules
+    assert (cmd.options.first_message, pose.options.first_message) == ("fresh", "cached")
+    with pytest.raises(MappingError, match="first_message"):
+        load_mapping_text(text.replace("first_message: cached", "first_message: stale"), "m.yaml")
