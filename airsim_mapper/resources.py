@@ -35,3 +35,11 @@ def mapping_path(spec: str | Path) -> Path:
     if not path.is_absolute() and (PACKAGE_DIR / path).is_file():
         return PACKAGE_DIR / path
     return path
+
+
+def package_sim_config() -> Path | None:
+    """The scene configs that ship beside the package (a checkout's or catkin package's `sim_config/`)."""
+    for candidate in (PACKAGE_DIR / "sim_config", PACKAGE_DIR.parent / "sim_config"):
+        if candidate.is_dir():
+            return candidate
+    return None

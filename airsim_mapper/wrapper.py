@@ -1,7 +1,8 @@
 """ProjectAirSimWrapper: the bridge as an object a mission script embeds (the public API that the Project
 AirSim ROS bridge documentation describes).
 
-Call `rospy.init_node` first. The wrapper either creates its own client (kept in `projectairsim_client`
+Call `rospy.init_node` first. Without a scene the wrapper runs the node's own bridges (load_scene) and
+waits for one. The wrapper either creates its own client (kept in `projectairsim_client`
 and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
 a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow.
 
@@ -25,9 +26,10 @@ from airsim_mapper.engine.diagnostics import Diagnostics
 from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
 from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
-from airsim_mapper.engine.sim_link import close_client
+from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
@@ -55,7 +57,13 @@ def redirect_client_log() -> None:
 
 
 class ProjectAirSimWrapper:
-    """Runs the bridge for a mapping on a Project AirSim client, in the calling ROS node."""
+    """Runs the bridge for a mapping on a Project AirSim client, in the calling ROS node.
+
+    The wrapper changes nothing process-wide unless asked: with `tune_process=True` (what the node does)
+    it limits numpy's OpenBLAS to one thread, lowers the interpreter's switch interval to 0.5 ms, makes
+    every rospy publisher of the process send on the publishing thread when the socket takes the message
+    at once, and freezes the heap after each scene change (`gc.freeze`); engine/realtime.py explains why.
+    """
 
     def __init__(
         self,
@@ -72,6 +80,8 @@ class ProjectAirSimWrapper:
         disconnect_on_shutdown: bool | None = None,
         client_factory: Callable[[], Any] | None = None,
         shutdown_timeout: float = SHUTDOWN_TIMEOUT_S,
+        tune_process: bool = False,
+        max_frame_mb: float = MAX_FRAME_MB,
     ) -> None:
         redirect_client_log()
         self.shutdown_timeout = shutdown_timeout
@@ -81,14 +91,25 @@ class ProjectAirSimWrapper:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
             client = client_factory()
         self.sim_config_path = str(sim_config_path)
-        name = node_name if node_name is not None else rospy.get_name().lstrip("/")
+        name = node_name if node_name is not None else rospy.get_name().rsplit("/", 1)[-1]
+        # As a ROS name: "sim1" below the node's namespace (ROS_NAMESPACE, <group ns>, __ns:=); "/sim1" as is
+        namespace = resolve_namespace(namespace, rospy.get_namespace())
+        self.namespace = namespace
         self.engine = Engine(
-            client, self.mapping, self.sim_config_path, name, namespace, client_factory=client_factory
+            client,
+            self.mapping,
+            self.sim_config_path,
+            name,
+            namespace,
+            client_factory=client_factory,
+            tune=tune_process,
+            frame_counts=FrameCounts(max_frame_bytes=int(max_frame_mb * 1024 * 1024)),
         )
         self.master_watch = MasterWatch()
         self.diagnostics = Diagnostics(self.engine, name)
         self._closed = False
         rospy.on_shutdown(self.shutdown)
+        self.engine.start_node_bridges()  # load_scene is there before (and without) any scene
         if scene:
             self.engine.load_scene(scene)
 
@@ -105,9 +126,10 @@ class ProjectAirSimWrapper:
     def scene(self) -> Scene | None:
         return self.engine.scene
 
-    def load_scene(self, scene_file: str) -> Scene:
-        """Load a scene file from `sim_config_path` into the simulator and bridge it."""
-        return self.engine.load_scene(scene_file)
+    def load_scene(self, scene_file: str | Scene, specs: tuple[BridgeSpec, ...] | None = None) -> Scene:
+        """Load a scene file from `sim_config_path` into the simulator and bridge it (or a Scene already
+        read, with its bridges already expanded for this node: see Engine.load_scene)."""
+        return self.engine.load_scene(scene_file, specs)
 
     def update_topics(self, world: Any = None) -> None:
         """Re-bridge after a mission script loaded a scene with `World(...)` on the shared client.

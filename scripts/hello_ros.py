@@ -97,7 +97,9 @@ def run(argv: list[str]) -> int:
     client.connect()
     try:
         world = World(client, args.scene, sim_config_path=args.simconfigpath.rstrip("/") + "/")
-        bridge = ProjectAirSimWrapper(client, sim_config_path=args.simconfigpath, mapping=args.mapping)
+        bridge = ProjectAirSimWrapper(
+            client, sim_config_path=args.simconfigpath, mapping=args.mapping, tune_process=True
+        )
         bridge.update_topics(world)
         drone = Drone(client, world, args.robot)
     except BaseException:

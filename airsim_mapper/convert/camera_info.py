@@ -24,6 +24,9 @@ DISTORTION_MODEL = "plumb_bob"
 Intrinsics = tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], tuple[float, ...]]
 
 
+UINT32_MAX = 2**32 - 1  # CameraInfo's width and height are uint32
+
+
 @functools.lru_cache(maxsize=64)
 def intrinsics(width: int, height: int, fov_degrees: float) -> Intrinsics:
     """(D, K, R, P) as immutable tuples for an image size and horizontal field of view."""
@@ -48,8 +51,8 @@ def camera_info(msg: Mapping[str, Any], ctx: ConvertContext) -> CameraInfo:
         return None
     width = sim_fields.integer(sim_fields.field(msg, "width", "image"), "camera_info: width")
     height = sim_fields.integer(sim_fields.field(msg, "height", "image"), "camera_info: height")
-    if width <= 0 or height <= 0:
-        raise ConversionError(f"camera_info: size {width}x{height} must be positive")
+    if not (0 < width <= UINT32_MAX and 0 < height <= UINT32_MAX):
+        raise ConversionError(f"camera_info: size {width}x{height} must be positive and fit a uint32")
     fov = sim_fields.number(ctx.source.get("fov-degrees", DEFAULT_FOV_DEGREES), "camera_info: fov-degrees")
     d, k, r, p = intrinsics(width, height, fov)
     return CameraInfo(

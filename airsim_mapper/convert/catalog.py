@@ -9,8 +9,11 @@ Contract of an implementation (see registry.py):
 - ros_to_sim: ``fn(ros_msg, ctx: ConvertContext) -> dict`` (sim topic message or service params)
 Converters raise ``ConversionError`` (airsim_mapper.convert.errors) for malformed input, nothing else.
 
-`markdown_table` renders the catalogue for people: `airsim-mapper converters` prints it, and the README's
-converter table is that output (a test keeps the two equal).
+Each entry also says how the engine runs the converter (`runner`, engine/bridges.py) and what follows a
+successful simulator call (`after`), so the engine never tests converter names.
+
+`markdown_table` renders the catalogue for people: `airsim-mapper converters` prints it, and
+`docs/converters.md` is that output (a test keeps the two equal).
 """
 
 from __future__ import annotations
@@ -21,20 +24,43 @@ from dataclasses import dataclass
 SIM_TO_ROS = "sim_to_ros"
 ROS_TO_SIM = "ros_to_sim"
 
+# How the engine runs a converter's bridges (engine/bridges.py has one runner for each).
+PUBLISH = "publish"  # a simulator topic -> the converter -> a ROS topic and/or tf
+STREAM = "stream"  # the active streaming camera's image -> a ROS topic (the camera follows switch_view)
+SEND = "send"  # a ROS topic -> the converter -> a simulator topic
+CALL = "call"  # a ROS topic -> the converter -> a simulator service call (with the command watchdog)
+SERVE = "serve"  # a ROS service -> the converter -> a simulator service call; answered from its result
+SERVE_ALL = "serve_all"  # a ROS service -> the rule's robot method on every robot of the scene
+ACTION = "action"  # a ROS topic -> the converter -> an engine action (the entry's `action`)
+RUNNERS = (PUBLISH, STREAM, SEND, CALL, SERVE, SERVE_ALL, ACTION)
+SIM_KINDS = {PUBLISH: "topic", SEND: "topic", CALL: "service", SERVE: "service", SERVE_ALL: "service"}
+# What runs after a successful simulator call (engine/bridges.py AFTER_HOOKS), and the engine's actions.
+AFTER_HOOKS = ("remember_camera_pose", "next_streaming_camera")
+ACTIONS = ("load_scene",)
+
 
 @dataclass(frozen=True)
 class ConverterInfo:
     name: str
     direction: str  # SIM_TO_ROS or ROS_TO_SIM
     ros_types: tuple[str, ...]  # ROS message (or service) types it produces / consumes
-    sim_kind: str  # "topic" (sim topic) or "service" (sim service method) or "node" (handled by the engine)
+    runner: str  # one of RUNNERS
     module: str  # module in airsim_mapper.convert holding the function
     function: str
     summary: str
+    after: str | None = None  # one of AFTER_HOOKS
+    action: str | None = None  # one of ACTIONS (runner ACTION)
+
+    @property
+    def sim_kind(self) -> str:
+        """What the rule's `sim` names: "topic", "service", or "node" (the engine supplies the source)."""
+        return SIM_KINDS.get(self.runner, "node")
 
 
-def _c(name, direction, ros_types, sim_kind, module, function, summary) -> ConverterInfo:
-    return ConverterInfo(name, direction, tuple(ros_types), sim_kind, module, function, summary)
+def _c(
+    name, direction, ros_types, runner, module, function, summary, after=None, action=None
+) -> ConverterInfo:
+    return ConverterInfo(name, direction, tuple(ros_types), runner, module, function, summary, after, action)
 
 
 CONVERTERS: dict[str, ConverterInfo] = {
@@ -45,7 +71,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             SIM_TO_ROS,
             ["geometry_msgs/PoseStamped"],
-            "topic",
+            PUBLISH,
             "pose",
             "pose_stamped",
             "sim PoseStamped (robot actual_pose) -> PoseStamped; with tf, also the robot's transform",
@@ -54,7 +80,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "camera_pose",
             SIM_TO_ROS,
             ["geometry_msgs/PoseStamped"],
-            "topic",
+            PUBLISH,
             "pose",
             "camera_pose",
             "robot actual_pose composed with the camera mount (and any camera pose command) -> camera pose",
@@ -63,7 +89,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "sensor_pose",
             SIM_TO_ROS,
             ["geometry_msgs/PoseStamped"],
-            "topic",
+            PUBLISH,
             "pose",
             "sensor_pose",
             "robot actual_pose composed with a sensor's config origin (lidar, radar, distance) -> its pose",
@@ -72,7 +98,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "camera_optical_pose",
             SIM_TO_ROS,
             ["geometry_msgs/PoseStamped"],
-            "topic",
+            PUBLISH,
             "pose",
             "camera_optical_pose",
             "as camera_pose, turned into the optical frame (z forward, x right, y down) for image frames",
@@ -81,7 +107,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "odometry",
             SIM_TO_ROS,
             ["nav_msgs/Odometry"],
-            "topic",
+            PUBLISH,
             "odometry",
             "odometry",
             "robot actual_pose -> Odometry; body-frame twist from successive poses (state in ctx.shared)",
@@ -90,7 +116,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "collision",
             SIM_TO_ROS,
             ["geometry_msgs/PointStamped"],
-            "topic",
+            PUBLISH,
             "collision",
             "collision",
             "sim CollisionInfo -> PointStamped of the impact point (world frame)",
@@ -99,7 +125,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "image",
             SIM_TO_ROS,
             ["sensor_msgs/Image"],
-            "topic",
+            PUBLISH,
             "image",
             "image",
             "sim Image (BGR, PNG, 16FC1, 16UC1, GRAY8) -> Image (bgr8, 32FC1 metres, mono8)",
@@ -108,7 +134,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "camera_info",
             SIM_TO_ROS,
             ["sensor_msgs/CameraInfo"],
-            "topic",
+            PUBLISH,
             "camera_info",
             "camera_info",
             "sim Image (for its size and stamp) + capture settings -> CameraInfo (plumb_bob, K, P from fov)",
@@ -117,7 +143,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pointcloud",
             SIM_TO_ROS,
             ["sensor_msgs/PointCloud2"],
-            "topic",
+            PUBLISH,
             "pointcloud",
             "pointcloud",
             "sim Lidar -> PointCloud2 with x, y, z, intensity, segmentation",
@@ -126,7 +152,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "radar_scan",
             SIM_TO_ROS,
             ["radar_msgs/RadarScan"],
-            "topic",
+            PUBLISH,
             "radar",
             "radar_scan",
             "sim RadarDetection -> RadarScan (range, azimuth, elevation, doppler, amplitude dB from rcs)",
@@ -135,7 +161,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "radar_tracks",
             SIM_TO_ROS,
             ["radar_msgs/RadarTracks"],
-            "topic",
+            PUBLISH,
             "radar",
             "radar_tracks",
             "sim RadarTrack -> RadarTracks (uuid from id, position, velocity, acceleration)",
@@ -144,17 +170,17 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "clock",
             SIM_TO_ROS,
             ["rosgraph_msgs/Clock"],
-            "topic",
+            PUBLISH,
             "clock",
             "clock",
             "any stamped sim message -> Clock at its sim time",
         ),
-        _c("imu", SIM_TO_ROS, ["sensor_msgs/Imu"], "topic", "instruments", "imu", "sim IMU -> Imu"),
+        _c("imu", SIM_TO_ROS, ["sensor_msgs/Imu"], PUBLISH, "instruments", "imu", "sim IMU -> Imu"),
         _c(
             "gps",
             SIM_TO_ROS,
             ["sensor_msgs/NavSatFix"],
-            "topic",
+            PUBLISH,
             "instruments",
             "gps",
             "sim GPS -> NavSatFix",
@@ -163,7 +189,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "barometer",
             SIM_TO_ROS,
             ["sensor_msgs/FluidPressure"],
-            "topic",
+            PUBLISH,
             "instruments",
             "barometer",
             "sim Barometer -> FluidPressure (Pa)",
@@ -172,7 +198,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "magnetometer",
             SIM_TO_ROS,
             ["sensor_msgs/MagneticField"],
-            "topic",
+            PUBLISH,
             "instruments",
             "magnetometer",
             "sim Magnetometer (gauss) -> MagneticField (tesla)",
@@ -181,7 +207,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "distance",
             SIM_TO_ROS,
             ["sensor_msgs/Range"],
-            "topic",
+            PUBLISH,
             "instruments",
             "distance",
             "sim DistanceSensor -> Range",
@@ -190,7 +216,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "battery",
             SIM_TO_ROS,
             ["sensor_msgs/BatteryState"],
-            "topic",
+            PUBLISH,
             "instruments",
             "battery",
             "sim Battery -> BatteryState",
@@ -199,7 +225,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "airspeed",
             SIM_TO_ROS,
             ["sensor_msgs/FluidPressure"],
-            "topic",
+            PUBLISH,
             "instruments",
             "airspeed",
             "sim Airspeed (differential pressure) -> FluidPressure (Pa)",
@@ -208,7 +234,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "streaming_image",
             SIM_TO_ROS,
             ["sensor_msgs/Image"],
-            "node",
+            STREAM,
             "image",
             "image",
             "the active streaming camera's scene image (the engine follows switch_view)",
@@ -218,7 +244,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "cmd_vel",
             ROS_TO_SIM,
             ["geometry_msgs/Twist"],
-            "service",
+            CALL,
             "command",
             "cmd_vel",
             "Twist -> MoveByVelocityBodyFrame (or MoveByVelocity) params, with limits and a watchdog",
@@ -227,7 +253,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "desired_pose",
             ROS_TO_SIM,
             ["geometry_msgs/PoseStamped"],
-            "topic",
+            SEND,
             "command",
             "desired_pose",
             "PoseStamped -> sim desired_pose message (robot teleport)",
@@ -236,25 +262,27 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "camera_desired_pose",
             ROS_TO_SIM,
             ["geometry_msgs/PoseStamped"],
-            "service",
+            CALL,
             "command",
             "camera_desired_pose",
             "PoseStamped -> camera SetPose params with wait_for_pose_update",
+            after="remember_camera_pose",
         ),
         _c(
             "load_scene",
             ROS_TO_SIM,
             ["std_msgs/String"],
-            "node",
+            ACTION,
             "command",
             "load_scene",
             "String scene file name -> the engine loads it from --simconfigpath",
+            action="load_scene",
         ),
         _c(
             "trigger",
             ROS_TO_SIM,
             ["std_srvs/Trigger", "std_srvs/Empty"],
-            "service",
+            SERVE,
             "command",
             "trigger",
             "service request -> sim service call with the rule's fixed params; reply from its result",
@@ -263,7 +291,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "reset_pose",
             ROS_TO_SIM,
             ["std_srvs/Trigger", "std_srvs/Empty"],
-            "service",
+            SERVE,
             "reset",
             "reset_pose",
             "service request -> robot SetPose params that return it to its scene origin, at rest",
@@ -272,7 +300,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "trigger_all",
             ROS_TO_SIM,
             ["std_srvs/Trigger"],
-            "service",
+            SERVE_ALL,
             "command",
             "trigger",
             "Trigger -> the robot method params.method on every robot of the scene (sim: the robots prefix)",
@@ -281,7 +309,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "set_bool",
             ROS_TO_SIM,
             ["std_srvs/SetBool"],
-            "service",
+            SERVE,
             "command",
             "set_bool",
             "SetBool request -> sim service call with the bool as the rule's param",
@@ -290,10 +318,11 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "switch_view",
             ROS_TO_SIM,
             ["std_srvs/Trigger"],
-            "node",
+            SERVE,
             "command",
             "trigger",
             "Trigger -> SwitchStreamingView, and the streaming image follows the next camera",
+            after="next_streaming_camera",
         ),
     )
 }

@@ -9,7 +9,8 @@
   outside [QUAT_NORM_MIN, QUAT_NORM_MAX] is rejected as not meant to be a rotation, otherwise it is
   normalised. The position must lie in limits.position_box (in the message's own convention), else it
   is clamped into the box or rejected. header.frame_id must be empty or in params ``accepted_frames``
-  (default ["", "map"]).
+  (default ["", params.target_frame] with a target frame, else ["", "map"]); the engine transforms a goal in
+  any other tf frame into ``target_frame`` before it gets here.
 """
 
 from __future__ import annotations
@@ -146,7 +147,8 @@ def cmd_vel(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
 
 def _check_frame(msg: Any, ctx: ConvertContext) -> None:
     frame_id = msg.header.frame_id
-    accepted = ctx.params.get("accepted_frames", DEFAULT_ACCEPTED_FRAMES)
+    target = ctx.params.get("target_frame")  # the engine transformed any other frame into it with tf
+    accepted = ctx.params.get("accepted_frames", ("", target) if target else DEFAULT_ACCEPTED_FRAMES)
     if frame_id and frame_id not in accepted:
         raise ConversionError(
             f"header.frame_id {frame_id!r} is not accepted; expected one of {sorted(set(accepted))}"

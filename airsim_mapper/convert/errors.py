@@ -11,6 +11,10 @@ class ConversionError(ValueError):
     """
 
 
+class OversizedData(ConversionError):
+    """A message larger than its bound (an image over ``max_pixels``): dropped and counted as oversized."""
+
+
 class ConverterNotFound(LookupError):
     """No converter of that name exists in the catalogue."""
 

@@ -6,6 +6,11 @@ metres, ``GRAY8`` -> mono8, and the git server's ``32FC1`` (pixels in ``data`` o
 ``data`` may be bytes (topic form), another bytes-like object, or a list of ints (GetImages form).
 float16 -> float32 uses OpenCV's SIMD conversion (bit-exact with numpy's astype, and faster).
 
+Bounds, checked before any pixel is converted: an image with no pixels (0xN) is dropped; one over
+``max_pixels`` (the rule's ``params.max_pixels``, default MAX_PIXELS) raises OversizedData. A PNG's own
+size is read from its IHDR header and must be the declared one, so a small compressed file cannot decode
+into an image far larger than the message says.
+
 The result is a `BufferImage`: a sensor_msgs/Image whose ``data`` may be any byte buffer (bytes, or a
 memoryview of the received frame or of the converted pixels), written out as it is when published.
 """
@@ -23,7 +28,7 @@ from sensor_msgs.msg import Image
 
 from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.context import ConvertContext
-from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.stamps import header
 
 
@@ -43,6 +48,9 @@ ENCODINGS: dict[str, Encoding] = {
     "32FC1": Encoding("32FC1", 4, 4),
 }
 MM_PER_M = 1000.0
+MAX_PIXELS = 50_000_000  # per image; an 8K frame has 33 million
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+PNG_IHDR = struct.Struct(">I4sII")  # the first chunk: length, b"IHDR", width, height
 
 
 class BufferImage(Image):
@@ -102,11 +110,30 @@ def _check_size(data: Pixels, height: int, width: int, encoding: str, per_pixel:
         )
 
 
+def png_size(data: Pixels) -> tuple[int, int]:
+    """(width, height) from a PNG's IHDR header, without decoding anything."""
+    head = bytes(data[: len(PNG_SIGNATURE) + PNG_IHDR.size])
+    if not head.startswith(PNG_SIGNATURE):
+        raise ConversionError("image: PNG data does not start with the PNG signature")
+    if len(head) < len(PNG_SIGNATURE) + PNG_IHDR.size:
+        raise ConversionError(f"image: PNG data is {len(data)} bytes, too short for its header")
+    _length, kind, width, height = PNG_IHDR.unpack_from(head, len(PNG_SIGNATURE))
+    if kind != b"IHDR":
+        raise ConversionError(f"image: PNG's first chunk is {kind!r}, not IHDR")
+    return width, height
+
+
 def _decode_png(data: Pixels, height: int, width: int) -> Pixels:
     import cv2
 
     if not data:
         raise ConversionError("image: PNG data is empty")
+    header_width, header_height = png_size(data)
+    if (header_height, header_width) != (height, width):
+        raise ConversionError(
+            f"image: PNG header says {header_width}x{header_height}, the message {width}x{height}; "
+            "not decoded"
+        )
     try:
         decoded = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_COLOR)
     except cv2.error as exc:
@@ -174,6 +201,11 @@ def image(msg: Mapping[str, Any], ctx: ConvertContext) -> Image:
     width = sim_fields.integer(sim_fields.field(msg, "width", "image"), "image: width")
     if height < 0 or width < 0:
         raise ConversionError(f"image: size {width}x{height} must not be negative")
+    if height == 0 or width == 0:
+        raise ConversionError(f"image: size {width}x{height} has no pixels")
+    limit = ctx.params.get("max_pixels", MAX_PIXELS)
+    if height * width > limit:
+        raise OversizedData(f"image: {width}x{height} is over the limit of {limit} pixels (max_pixels)")
     order = ">" if msg.get("big_endian", False) else "<"
     data = _payload(msg, encoding)
     if encoding == "PNG":

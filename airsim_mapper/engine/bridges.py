@@ -1,4 +1,9 @@
-"""Runners for expanded bridges: each takes a BridgeSpec and wires sim link <-> converter <-> ROS link."""
+"""Runners for expanded bridges: each takes a BridgeSpec and wires sim link <-> converter <-> ROS link.
+
+The converter catalogue says how each converter runs (`ConverterInfo.runner`), what follows a successful
+simulator call (`after`) and which engine action a rule triggers (`action`); `build` dispatches on those
+alone, so adding a converter touches the catalogue and its own module, never this file.
+"""
 
 from __future__ import annotations
 
@@ -6,19 +11,19 @@ import logging
 import threading
 import time
 from collections.abc import Callable, MutableMapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
-import rospy
-
-from airsim_mapper.convert import registry
+from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
-from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
-from airsim_mapper.engine.ros_link import PeerListener, TfBroadcaster, message_class, transform_from_pose
-from airsim_mapper.engine.sim_link import SimLink, SimLinkError
-from airsim_mapper.mapping.model import SIM_TO_ROS, BridgeSpec
+from airsim_mapper.engine.replays import LatchedReplays, connection_header
+from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, RosLink, transform_from_pose
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
+from airsim_mapper.engine.simtime import SimTimeWatch
+from airsim_mapper.mapping.model import BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
@@ -28,7 +33,7 @@ WARN_PERIOD_S = 5.0
 class BridgeStats:
     messages: int = 0  # converted and published / forwarded
     errors: int = 0  # rejected or failed
-    last_stamp: Any = None  # header stamp (rospy.Time) of the last published message
+    last_stamp: Any = None  # header stamp (a genpy Time) of the last published message
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
 
@@ -58,22 +63,25 @@ class Services:
 
     sim: SimLink
     hub: StreamHub
-    tf: TfBroadcaster
+    ros: RosLink
     shared: MutableMapping[Any, Any]
-    node_action: Callable[[BridgeSpec, dict], Any]  # load_scene and other engine-level actions
+    node_action: Callable[[str, dict], Any]  # an engine action by its catalogue name (load_scene)
+    streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
+    counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
+    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # /clock going backwards
 
 
-def make_context(spec: BridgeSpec, shared: MutableMapping[Any, Any]) -> ConvertContext:
+def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
     return ConvertContext(
         frame_id=spec.frame_id or "",
         convention=spec.convention,
         stamp=spec.options.stamp,
-        now=rospy.Time.now,
+        now=services.ros.now,
         params=spec.params,
         source=spec.source,
         variables=spec.variables,
         options=spec.options,
-        shared=shared,
+        shared=services.shared,
     )
 
 
@@ -83,9 +91,15 @@ class Bridge:
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         self.spec = spec
         self.services = services
+        self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
         self.warn = Throttled(spec.name).warn
-        self.ctx = make_context(spec, services.shared)
+        self.ctx = make_context(spec, services)
+
+    def after_call(self, params: dict, result: Any) -> None:
+        """The catalogue's after-hook, once the simulator accepted a call (a result other than false)."""
+        if self.info.after is not None and _accepted(result):
+            AFTER_HOOKS[self.info.after](self, params, result)
 
     def start(self) -> None:
         raise NotImplementedError
@@ -105,13 +119,14 @@ class SimToRos(Bridge):
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        self.publisher: rospy.Publisher | None = None
+        self.publisher: Any = None
         self._attached = False
         self._stopped = False
         self._lock = threading.Lock()
         self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
         self._last_publish = -1e9
         self.topic = spec.sim
+        self._is_clock = spec.ros_type == "rosgraph_msgs/Clock"  # what /use_sim_time nodes follow
 
     @property
     def lazy(self) -> bool:
@@ -120,12 +135,12 @@ class SimToRos(Bridge):
     def start(self) -> None:
         spec = self.spec
         if spec.ros is not None:
-            self.publisher = rospy.Publisher(
+            self.publisher = self.services.ros.publisher(
                 spec.ros,
-                message_class(spec.ros_type),
+                spec.ros_type,
                 queue_size=spec.options.queue_size,
                 latch=spec.options.latch,
-                subscriber_listener=PeerListener(self._peers_changed) if self.lazy else None,
+                on_peers=self._peers_changed if self.lazy else None,
             )
         if self.lazy:
             self._peers_changed()
@@ -157,6 +172,8 @@ class SimToRos(Bridge):
         try:
             out = self.convert(message, self.ctx)
         except ConversionError as exc:
+            if isinstance(exc, OversizedData):
+                self.services.counts.oversized += 1
             self.fail(f"dropped a message from {self.topic}: {exc}")
             return None
         if out is None:
@@ -167,10 +184,12 @@ class SimToRos(Bridge):
         if self.publisher is not None:
             try:
                 self.publisher.publish(out)
-            except rospy.ROSException:  # unregistered by a concurrent stop
+            except ClosedEndpoint:  # unregistered by a concurrent stop
                 return None
         self.stats.messages += 1
         self.stats.last_time = now
+        if self._is_clock:
+            self.services.sim_time.observe(out.clock.to_nsec(), now)
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp
@@ -204,45 +223,65 @@ class RosToSim(Bridge):
     def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        self.subscriber: rospy.Subscriber | None = None
+        self.subscriber: Any = None
         self.last_message = 0.0
         self.moving = False  # a command was sent since the last watchdog stop
         self.pending: Any = None
+        # An engine action (load_scene) acts once per message: a latched message replayed on a new
+        # connection is ignored.
+        self.replays = LatchedReplays() if self.info.runner == catalog.ACTION else None
 
     def start(self) -> None:
-        self.subscriber = rospy.Subscriber(
-            self.spec.ros,
-            message_class(self.spec.ros_type),
-            self.on_message,
-            queue_size=self.spec.options.queue_size,
+        self.subscriber = self.services.ros.subscriber(
+            self.spec.ros, self.spec.ros_type, self.on_message, queue_size=self.spec.options.queue_size
         )
 
     def on_message(self, ros_msg: Any) -> None:
+        if self.replays is not None and self.replays.is_replay(connection_header(ros_msg), _payload(ros_msg)):
+            log.info(
+                "%s: ignored the latched message %s replayed it on a new connection",
+                self.spec.name,
+                connection_header(ros_msg).get("callerid", "a publisher"),
+            )
+            return
+        try:
+            ros_msg = self._in_target_frame(ros_msg)
+        except FrameUnknown as exc:
+            self.fail(f"refused a message on {self.spec.ros}, nothing sent: {exc}")
+            return
         try:
             params = self.convert(ros_msg, self.ctx)
             require_finite(params)
         except ConversionError as exc:
             self.fail(f"rejected a message on {self.spec.ros}: {exc}")
             return
-        spec = self.spec
+        spec, runner = self.spec, self.info.runner
         self.last_message = time.monotonic()
         try:
-            if spec.sim_kind == "topic":
+            if runner == catalog.SEND:
                 self.services.sim.publish(spec.sim, params)
                 self.stats.messages += 1
-            elif spec.sim_kind == "service":
+            elif runner == catalog.CALL:
                 self.moving = spec.options.watchdog_s is not None
                 future = self.services.sim.call_async(spec.sim, params)
                 future.add_done_callback(lambda f, p=params: self._on_reply(f, p))
             else:
-                self.services.node_action(spec, params)
+                self.services.node_action(self.info.action, params)
                 self.stats.messages += 1
         except Exception as exc:  # the node never dies from one bad message
             self.fail(f"could not forward a message on {spec.ros}: {exc}")
 
+    def _in_target_frame(self, ros_msg: Any) -> Any:
+        """A stamped goal in another tf frame than the rule's target_frame, transformed into it."""
+        target = self.spec.params.get("target_frame")
+        header = getattr(ros_msg, "header", None)
+        if not target or header is None or header.frame_id in ("", target):
+            return ros_msg
+        return self.services.ros.transform_pose(ros_msg, target)
+
     def _on_reply(self, future: Any, params: dict) -> None:
         try:
-            future.result()
+            result = future.result()
         except SimLinkError as exc:
             self.fail(str(exc))
             return
@@ -250,14 +289,7 @@ class RosToSim(Bridge):
             self.fail(f"{self.spec.sim}: {exc}")
             return
         self.stats.messages += 1
-        if self.spec.converter == "camera_desired_pose":
-            self._remember_camera_pose(params)
-
-    def _remember_camera_pose(self, params: dict) -> None:
-        from airsim_mapper.convert.pose import camera_pose_key, camera_pose_override
-
-        key = camera_pose_key(self.spec.variables.get("robot_name"), self.spec.variables.get("camera_name"))
-        self.services.shared[key] = camera_pose_override(params)
+        self.after_call(params, result)
 
     def check_watchdog(self, now: float) -> None:
         """Stop the robot when commands stopped arriving for `watchdog_s` seconds."""
@@ -287,35 +319,30 @@ class RosToSim(Bridge):
 class RosService(Bridge):
     """A ROS service (std_srvs) whose requests become sim service calls."""
 
-    def __init__(
-        self, spec: BridgeSpec, services: Services, after: Callable[[Any], None] | None = None
-    ) -> None:
+    def __init__(self, spec: BridgeSpec, services: Services) -> None:
         super().__init__(spec, services)
         self.convert = registry.get(spec.converter)
-        self.service: rospy.Service | None = None
-        self._after = after
+        self.service: Any = None
 
     def start(self) -> None:
-        srv_class = message_class(self.spec.ros_type, "srv")
-        self._response = srv_class._response_class
-        self.service = rospy.Service(self.spec.ros, srv_class, self.on_request)
+        self.service, self._response = self.services.ros.service(
+            self.spec.ros, self.spec.ros_type, self.on_request
+        )
 
     def on_request(self, request: Any) -> Any:
         response = self._response()
         try:
             params = self.convert(request, self.ctx)
             require_finite(params)
-            if self.spec.converter == "trigger_all":
+            if self.info.runner == catalog.SERVE_ALL:
                 return self._on_all_robots(response, params)
             result = self.services.sim.call(self.spec.sim, params)
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
             return _fill(response, False, str(exc))
         self.stats.messages += 1
-        if self._after is not None:
-            self._after(result)
-        ok = result is not False and result is not None
-        return _fill(response, ok, "" if isinstance(result, bool) else str(result))
+        self.after_call(params, result)
+        return _fill(response, _accepted(result), "" if isinstance(result, bool) else str(result))
 
     def _on_all_robots(self, response: Any, params: dict) -> Any:
         """Call `<sim>/<robot>/<params.method>` on every robot of the scene at once; succeed if all do."""
@@ -341,6 +368,18 @@ class RosService(Bridge):
             self.service.shutdown()
 
 
+def _accepted(result: Any) -> bool:
+    return result is not False and result is not None
+
+
+def _payload(ros_msg: Any) -> Any:
+    """A hashable value of a message's fields (for telling a replay from a new message)."""
+    try:
+        return tuple(repr(getattr(ros_msg, slot)) for slot in ros_msg.__slots__)
+    except AttributeError:
+        return repr(ros_msg)
+
+
 def _fill(response: Any, success: bool, message: str) -> Any:
     if hasattr(response, "success"):
         response.success = success
@@ -358,6 +397,15 @@ class StreamingImage(SimToRos):
         self.active = 0
         self.topic = self.cameras[0]["sim"] if self.cameras else None
 
+    def start(self) -> None:
+        super().start()
+        self.services.streaming.append(self)
+
+    def stop(self) -> None:
+        if self in self.services.streaming:
+            self.services.streaming.remove(self)
+        super().stop()
+
     def next_camera(self) -> None:
         if len(self.cameras) < 2:
             return
@@ -370,21 +418,36 @@ class StreamingImage(SimToRos):
             self._set_attached(True)
 
 
-def build(spec: BridgeSpec, services: Services, streaming: list[StreamingImage]) -> Bridge:
-    """The runner for a spec."""
-    if spec.converter == "streaming_image":
-        bridge = StreamingImage(spec, services)
-        streaming.append(bridge)
-        return bridge
-    if spec.direction == SIM_TO_ROS:
-        return SimToRos(spec, services)
-    if spec.ros_type is not None and spec.ros_type.startswith("std_srvs/"):
-        after = None
-        if spec.converter == "switch_view":
+def remember_camera_pose(bridge: Bridge, params: dict, _result: Any) -> None:
+    """A camera pose command took effect: the camera's pose and image frames follow it."""
+    from airsim_mapper.convert.pose import camera_pose_key, camera_pose_override
 
-            def after(_result: Any) -> None:
-                for bridge in streaming:
-                    bridge.next_camera()
+    variables = bridge.spec.variables
+    key = camera_pose_key(variables.get("robot_name"), variables.get("camera_name"))
+    bridge.services.shared[key] = camera_pose_override(params)
 
-        return RosService(spec, services, after)
-    return RosToSim(spec, services)
+
+def next_streaming_camera(bridge: Bridge, _params: dict, _result: Any) -> None:
+    """The simulator switched its streaming view: the streaming image follows the next camera."""
+    for streaming in bridge.services.streaming:
+        streaming.next_camera()
+
+
+AFTER_HOOKS: dict[str, Callable[[Bridge, dict, Any], None]] = {
+    "remember_camera_pose": remember_camera_pose,
+    "next_streaming_camera": next_streaming_camera,
+}
+RUNNERS: dict[str, type[Bridge]] = {
+    catalog.PUBLISH: SimToRos,
+    catalog.STREAM: StreamingImage,
+    catalog.SEND: RosToSim,
+    catalog.CALL: RosToSim,
+    catalog.ACTION: RosToSim,
+    catalog.SERVE: RosService,
+    catalog.SERVE_ALL: RosService,
+}
+
+
+def build(spec: BridgeSpec, services: Services) -> Bridge:
+    """The runner the catalogue names for the spec's converter."""
+    return RUNNERS[catalog.CONVERTERS[spec.converter].runner](spec, services)

@@ -92,7 +92,7 @@ class Diagnostics:
 
     def statuses(self, now: float) -> list[dict[str, Any]]:
         streams = self.engine.hub.streams()
-        out = [self.connection_status()]
+        out = [self.connection_status(now)]
         report = getattr(self.engine, "mapping_report", None)
         if report:
             out.append(mapping_status(report, self.prefix))
@@ -106,20 +106,34 @@ class Diagnostics:
         self._seen = seen_now
         return out
 
-    def connection_status(self) -> dict[str, Any]:
+    def connection_status(self, now: float | None = None) -> dict[str, Any]:
+        """The simulator entry: ERROR while not connected, WARN for a while after sim time went back."""
+        now = time.monotonic() if now is None else now
         state = getattr(self.engine, "state", "connected")
         reason = getattr(self.engine, "reason", "")
         scene = self.engine.scene
-        level = OK if state == "connected" else ERROR
+        counts = getattr(self.engine, "frame_counts", None)
+        sim_time = getattr(self.engine, "sim_time", None)
+        jumped = sim_time.recent(now) if sim_time is not None else ""
+        level, message = OK, state if not reason else f"{state}: {reason}"
+        if state != "connected":
+            level = ERROR
+        elif jumped:
+            level, message = WARN, f"{message}; {jumped}"
         return {
             "name": f"{self.prefix}simulator",
             "level": level,
-            "message": state if not reason else f"{state}: {reason}",
+            "message": message,
             "values": {
                 "state": state,
                 "scene": scene.name if scene else "",
                 "scene_file": scene.file if scene else "",
                 "bridges": str(len(self.engine.bridges)),
+                **{
+                    key: str(getattr(counts, attr, 0))
+                    for key, attr in (("bad_frames", "bad"), ("oversized_frames", "oversized"))
+                },
+                "sim_time_jumps_back": str(getattr(sim_time, "jumps_back", 0)),
             },
         }
 

@@ -1,8 +1,9 @@
 """The engine: runs the bridges of a mapping for the current scene, and follows scene changes.
 
 Data flows one way: scene + mapping --expand--> BridgeSpecs --build--> runners wired to the sim link and
-the ROS link. A scene change tears the scene's runners down and builds the new scene's; bridges that do
-not depend on the scene (load_scene itself) keep running.
+the ROS link. The node's own bridges (load_scene) start before any scene (`start_node_bridges`) and keep
+running, untouched, across scene changes; a scene change tears the scene's runners down and builds the new
+scene's.
 
 Simulator loss (health.py decides; only a closed connection is a loss): the link is abandoned at once
 (its calls fail fast, its sockets are closed so a restarted server's single topics connection is free),
@@ -31,12 +32,13 @@ from pathlib import Path
 from typing import Any
 
 from airsim_mapper.convert.command import shorten
-from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, StreamingImage, build
+from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, Throttled, build
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
-from airsim_mapper.engine.ros_link import TfBroadcaster
-from airsim_mapper.engine.sim_link import SimLink, close_client
+from airsim_mapper.engine.ros_link import RosLink
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
+from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.errors import ConfigError
@@ -95,8 +97,14 @@ class Engine:
         namespace: str = "",
         load_world: Callable[[Any, Scene, str], Any] | None = None,
         client_factory: Callable[[], Any] | None = None,
+        tune: bool = False,
+        ros: RosLink | None = None,
+        link: Callable[[Any, FrameCounts], SimLink] = SimLink,
+        frame_counts: FrameCounts | None = None,
     ) -> None:
-        tune_process()
+        if tune:
+            tune_process()
+        self._freeze_heap = tune  # gc.freeze is process-wide: only for a process that asked for tuning
         self.gc_pauses = GcPauses()
         self.gc_frozen = 0
         self.client = client
@@ -104,11 +112,22 @@ class Engine:
         self.sim_config_path = str(sim_config_path)
         self.node_name = node_name
         self.namespace = namespace
-        self.sim = SimLink(client)
-        self.tf = TfBroadcaster()
-        self.hub = StreamHub(self.sim, self.tf.send)
+        self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
+        self._link = link
+        self.sim = link(client, self.frame_counts)
+        self.ros = ros or RosLink()
+        self.hub = StreamHub(self.sim, self.ros.send_tf)
         self.shared: dict[Any, Any] = {}
-        self.services = Services(self.sim, self.hub, self.tf, self.shared, self._node_action)
+        self.sim_time = SimTimeWatch(warn=Throttled("sim time").warn)
+        self.services = Services(
+            self.sim,
+            self.hub,
+            self.ros,
+            self.shared,
+            self._node_action,
+            counts=self.frame_counts,
+            sim_time=self.sim_time,
+        )
         self.bridges: dict[str, Bridge] = {}
         self.scene: Scene | None = None
         self.world: Any = None
@@ -125,7 +144,7 @@ class Engine:
         self.mapping_report: dict[str, Any] = {}  # live reload's state (engine/mapping_reload.py)
         self._stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self._stopping = threading.Event()
-        self._status = StatusPublisher(node_name)
+        self._status = StatusPublisher(self.ros, node_name)
         self._threads = [
             threading.Thread(target=self._watchdog_loop, name="watchdog", daemon=True),
             threading.Thread(target=self._scene_loop, name="scene-loader", daemon=True),
@@ -136,29 +155,42 @@ class Engine:
             thread.start()
 
     # --- building ---------------------------------------------------------------------------
-    def specs_for(self, scene: Scene) -> tuple[BridgeSpec, ...]:
+    def specs_for(self, scene: Scene | None) -> tuple[BridgeSpec, ...]:
+        """The bridges of `scene`, or the node's own (load_scene) without one."""
         return expand(self.mapping, scene, self.node_name, self.namespace)
 
-    def apply(self, scene: Scene) -> tuple[BridgeSpec, ...]:
-        """Run exactly the bridges of `scene`: stop the old scene's, start the new ones."""
-        specs = self.specs_for(scene)
+    def node_specs(self) -> dict[str, BridgeSpec]:
+        return {spec.name: spec for spec in self.specs_for(None)}
+
+    def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
+        """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
+        with self._lock:
+            if self.scene is not None:
+                return tuple(b.spec for b in self.bridges.values())
+            return self.apply(None)
+
+    def apply(
+        self, scene: Scene | None, specs: tuple[BridgeSpec, ...] | None = None
+    ) -> tuple[BridgeSpec, ...]:
+        """Run exactly the bridges of `scene` (its `specs`, when already expanded): stop the old scene's,
+        start the new ones."""
+        specs = self.specs_for(scene) if specs is None else specs
         with self._lock:
             self._stop_scene_bridges(keep={s.name: s for s in specs})
-            thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
+            if self._freeze_heap:
+                thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
             self.shared.clear()
-            streaming: list[StreamingImage] = [
-                b for b in self.bridges.values() if isinstance(b, StreamingImage)
-            ]
             for spec in specs:
                 if spec.name in self.bridges:
                     continue
-                bridge = build(spec, self.services, streaming)
+                bridge = build(spec, self.services)
                 bridge.start()
                 self.bridges[spec.name] = bridge
-            took_ms = freeze_heap()
-            self.gc_frozen = gc.get_freeze_count()  # counted here once: counting walks every frozen object
-            log.debug("heap frozen in %.1f ms (%d objects)", took_ms, self.gc_frozen)
+            if self._freeze_heap:
+                took_ms = freeze_heap()
+                self.gc_frozen = gc.get_freeze_count()  # counted once here: counting walks every object
+                log.debug("heap frozen in %.1f ms (%d objects)", took_ms, self.gc_frozen)
         return specs
 
     def _stop_scene_bridges(self, keep: dict[str, BridgeSpec]) -> None:
@@ -177,42 +209,47 @@ class Engine:
     def apply_mapping(self, mapping: Mapping) -> BridgeDiff:
         """Run `mapping` instead of the current one, touching only what differs: bridges whose expanded
         spec is unchanged keep running (their publishers, subscribers and simulator subscriptions), removed
-        and changed ones stop, new and changed ones start. MappingError (nothing changed) when `mapping`
-        does not expand over the running scene."""
+        and changed ones stop, new and changed ones start. Without a scene that is the node's own bridges.
+        MappingError (nothing changed) when `mapping` does not expand over the running scene."""
         with self._lock:
-            scene = self.scene
-            specs = expand(mapping, scene, self.node_name, self.namespace) if scene else ()
+            specs = expand(mapping, self.scene, self.node_name, self.namespace)
             diff = bridge_diff((b.spec for b in self.bridges.values()), specs)
             self.mapping = mapping
-            if scene is None:
-                return diff  # the next scene is expanded with it
             for name in (*diff.removed, *diff.changed):
                 try:
                     self.bridges.pop(name).stop()
                 except Exception:
                     log.exception("stopping %s failed", name)
-            streaming = [b for b in self.bridges.values() if isinstance(b, StreamingImage)]
             started = set(diff.added) | set(diff.changed)
             for spec in specs:
                 if spec.name in started:
-                    bridge = build(spec, self.services, streaming)
+                    bridge = build(spec, self.services)
                     bridge.start()
                     self.bridges[spec.name] = bridge
             self.bridges = {spec.name: self.bridges[spec.name] for spec in specs if spec.name in self.bridges}
-            # No full collection here (freeze_heap's would stop every running bridge for tens of ms): the
-            # new objects join the frozen heap as they are; cycles of the stopped bridges stay uncollected.
-            gc.freeze()
-            self.gc_frozen = gc.get_freeze_count()
+            if self._freeze_heap:
+                # No full collection here (freeze_heap's would stop every running bridge for tens of ms):
+                # the new objects join the frozen heap as they are; the stopped bridges' cycles stay.
+                gc.freeze()
+                self.gc_frozen = gc.get_freeze_count()
         return diff
 
     # --- scenes -----------------------------------------------------------------------------
-    def load_scene(self, scene_file: str) -> Scene:
-        """Validate, load into the simulator, and re-bridge. On any error the current scene stays."""
-        scene = read_scene(self.sim_config_path, scene_file)  # path and config checks first
-        self.specs_for(scene)  # the mapping must expand for it before anything is torn down
+    def load_scene(self, scene_file: str | Scene, specs: tuple[BridgeSpec, ...] | None = None) -> Scene:
+        """Validate, load into the simulator, and re-bridge. On any error the current scene stays.
+
+        A Scene already read (and its specs, expanded for this engine's node name and namespace) is used
+        as it is: the node reads and expands once at start-up and hands the result on.
+        """
+        if isinstance(scene_file, Scene):
+            scene, scene_file = scene_file, scene_file.file
+        else:
+            scene = read_scene(self.sim_config_path, scene_file)  # path and config checks first
+        # The mapping must expand for the scene before anything is torn down.
+        specs = self.specs_for(scene) if specs is None else specs
         with self._lock:
             self._require_link(f"load_scene {scene_file}")
-            self._stop_scene_bridges(keep={})
+            self._stop_scene_bridges(keep={s.name: s for s in specs})  # the node's own bridges stay
             self.hub.drop_all()
             self.sim.forget_all()
             try:
@@ -222,7 +259,7 @@ class Engine:
                     log.error("loading %s failed; restoring the bridges of %s", scene_file, self.scene.file)
                     self.apply(self.scene)
                 raise
-            self.apply(scene)
+            self.apply(scene, specs)
         log.info("scene %s (%s) loaded: %d bridges", scene.name, scene_file, len(self.bridges))
         return scene
 
@@ -230,7 +267,7 @@ class Engine:
         """A mission script loaded `scene` itself: its load cleared every subscription, so re-bridge."""
         with self._lock:
             self._require_link("adopt")
-            self._stop_scene_bridges(keep={})
+            self._stop_scene_bridges(keep=self.node_specs())
             self.hub.drop_all()
             self.sim.forget_all()
             self.world = world
@@ -276,11 +313,12 @@ class Engine:
             finally:
                 self._loading = None
 
-    def _node_action(self, spec: BridgeSpec, params: dict) -> None:
-        if spec.converter == "load_scene":
-            self.request_scene(params["scene"])
-        else:
-            raise ValueError(f"{spec.name}: converter {spec.converter!r} has no engine action")
+    def _node_action(self, action: str, params: dict) -> None:
+        """An engine action a bridge asked for, by the name the converter catalogue gives it."""
+        actions: dict[str, Callable[[dict], Any]] = {"load_scene": lambda p: self.request_scene(p["scene"])}
+        if action not in actions:
+            raise ValueError(f"the engine has no action {action!r}")
+        actions[action](params)
 
     # --- simulator health and reconnection ---------------------------------------------------
     def _require_link(self, what: str) -> None:
@@ -290,7 +328,7 @@ class Engine:
         if self._client_factory is not None:
             raise EngineError(f"{what}: the simulator connection is lost; the node is reconnecting")
         self.sim.stop_loop()  # the mission script's client: its owner says it works again
-        self._swap_link(SimLink(self.client), self.client, self.world)
+        self._swap_link(self._link(self.client, self.frame_counts), self.client, self.world)
 
     def _swap_link(self, link: SimLink, client: Any, world: Any) -> None:
         self.client, self.sim, self.services.sim, self.world = client, link, link, world
@@ -388,7 +426,7 @@ class Engine:
             return str(exc)
         start = time.monotonic()
         scene = self.scene
-        link = SimLink(client)  # first, so the scene load already uses the link's receive loop
+        link = self._link(client, self.frame_counts)  # first, so the scene load already uses its receive loop
         guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
         guard.start()
         try:
@@ -437,7 +475,10 @@ class Engine:
             "reason": self.reason,
             "scene": self.scene.file if self.scene else None,
             **self.counters,
-            "bad_frames": self.sim.bad_frames,
+            "bad_frames": self.frame_counts.bad,
+            "oversized_frames": self.frame_counts.oversized,
+            "sim_time_jumps_back": self.sim_time.jumps_back,
+            "sim_time_last_jump_back_s": round(self.sim_time.last_jump_s, 3),
             "gc_max_ms": self.gc_pauses.take_peak_ms(),
             "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
             "streams": streams,
@@ -491,6 +532,7 @@ class Engine:
         budget = min(UNSUBSCRIBE_TIMEOUT_S, max(0.1, end - time.monotonic() - 0.5))
         answered = self.sim.close(timeout=budget, client_topics=client_topics)
         self.hub.drop_all()
+        self.ros.close()
         self.state = STOPPED
         self.publish_status()
         self._status.close()

@@ -5,6 +5,10 @@ the link notices that at once (SimLink.connected), and only then is the link los
 and reloads the scene). A server that stalls (stopped, swapping, stuck in a long frame) keeps its
 connections and its scene; `HealthCheck` then calls it unresponsive after a few unanswered probes in a
 row, and answering again after that, without any reload: reloading would reset the simulation.
+
+A port that accepts connections but never answers (another program, or a hung simulator) is told apart
+from one where nothing listens: `open_client` waits at most `first_answer` seconds for the NNG handshake
+and then for the answer to one cheap request, and raises SimSilent if either does not come.
 """
 
 from __future__ import annotations
@@ -16,6 +20,9 @@ from typing import Any, Protocol
 PROBE_PERIOD_S = 0.5
 PROBE_TIMEOUT_S = 1.0
 PROBE_MISSES = 3
+PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
+FIRST_ANSWER_S = 10.0  # a new connection's first answer; NNG's own handshake timeout is also 10 s
+CLIENT_RECV_TIMEOUT_MS = 300000  # the client's own services timeout, restored after the first answer
 RETRY_FIRST_S = 0.25
 RETRY_STEPS: tuple[tuple[int, float], ...] = (
     (10, 0.5),  # the first ~5 s: a restarted server is found within half a second of listening
@@ -44,26 +51,67 @@ class SimUnreachable(ConnectionError):
         )
 
 
+class SimSilent(SimUnreachable):
+    """Something holds the simulator's ports but does not answer: retrying at start would wait forever."""
+
+    def __init__(self, address: str, topicsport: int, servicesport: int, seconds: float) -> None:
+        ConnectionError.__init__(
+            self,
+            f"simulator at {address}:{topicsport}/{servicesport} accepted the connection but did not answer "
+            f"within {seconds:g} s: is another program listening on these ports, or is the simulator hung?",
+        )
+
+
 class Probed(Protocol):
     def connected(self) -> bool: ...
 
     def probe(self, timeout: float) -> bool: ...
 
 
-def open_client(address: str, topicsport: int, servicesport: int) -> Any:
-    """A connected ProjectAirSimClient, or SimUnreachable (with the half-open sockets closed)."""
+def open_client(
+    address: str, topicsport: int, servicesport: int, first_answer: float = FIRST_ANSWER_S
+) -> Any:
+    """A connected ProjectAirSimClient that has answered one request within `first_answer` seconds.
+    SimUnreachable when nothing listens, SimSilent when the ports are held but nothing answers (the
+    sockets are closed either way)."""
+    import pynng
     from projectairsim import ProjectAirSimClient
 
     client = ProjectAirSimClient(address, topicsport, servicesport)
     try:
         client.connect()
+    except pynng.exceptions.Timeout:  # connected, but NNG's handshake never came
+        _close_sockets(client)
+        raise SimSilent(address, topicsport, servicesport, first_answer) from None
     except Exception as exc:
-        for sock in (client.socket_topics, client.socket_services):
-            if sock is not None:
-                with contextlib.suppress(Exception):
-                    sock.close()
+        _close_sockets(client)
         raise SimUnreachable(address, topicsport, servicesport, exc) from None
+    if not first_answer_within(client, first_answer):
+        _close_sockets(client)
+        raise SimSilent(address, topicsport, servicesport, first_answer)
     return client
+
+
+def first_answer_within(client: Any, seconds: float) -> bool:
+    """Whether a freshly connected client's server answers one cheap request within `seconds`."""
+    sock = client.socket_services
+    sock.recv_timeout = max(1, int(seconds * 1000))
+    try:
+        sock.send(client.preprocess_request({"method": PROBE_METHOD, "params": {}, "version": 1.0}))
+        client.postprocess_response(sock.recv_msg())
+    except Exception:
+        return False
+    finally:
+        sock.recv_timeout = CLIENT_RECV_TIMEOUT_MS
+    return True
+
+
+def _close_sockets(client: Any) -> None:
+    client.state = False
+    for sock in (client.socket_topics, client.socket_services):
+        if sock is not None:
+            with contextlib.suppress(Exception):
+                sock.close()
 
 
 @dataclass

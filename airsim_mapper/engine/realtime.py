@@ -97,7 +97,9 @@ class PromptQueuedConnection(QueuedConnection):
 
 
 def tune_process() -> None:
-    """Apply the settings to this process (idempotent; the engine calls it, so the node and the wrapper)."""
+    """Apply the thread settings and prompt publishing to this process (idempotent).
+
+    The node applies them; a mission script's wrapper only with `tune_process=True`."""
     if tune_threads():
         rospy.topics.QueuedConnection = PromptQueuedConnection
 

@@ -89,6 +89,15 @@ def knows_node(master_uri: str, caller_id: str, node_uri: str) -> bool | None:
     return code == 1 and uri == node_uri
 
 
+def needs_registration(known: bool | None, pid: int | None, last_pid: int | None) -> bool:
+    """Whether an answering master needs this node's registrations: it does not know the node (a
+    restarted master, whatever its pid), or its pid changed. A master that does not answer needs nothing
+    yet."""
+    if known is None or pid is None:
+        return False
+    return not known or pid != last_pid
+
+
 class MasterWatch:
     """A thread that re-registers this node whenever a new master answers (it does not know the node,
     or its pid changed)."""
@@ -115,9 +124,7 @@ class MasterWatch:
         if known is None:
             return None
         pid = master_pid(self.master_uri, self.caller_id)
-        if pid is None or (known and pid == self._pid):
-            return None
-        return pid
+        return pid if needs_registration(known, pid, self._pid) else None
 
     def _run(self) -> None:
         while not self._stop.wait(self.period):

@@ -1,4 +1,5 @@
-"""The ROS side of the engine: message classes, publishers with peer listeners, batched tf."""
+"""The ROS side of the engine: message classes, the ROS link (publishers with peer listeners,
+subscribers, services, the clock) and batched tf."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from typing import Any
 import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
+
+ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
 class RosTypeError(LookupError):
@@ -58,6 +61,58 @@ class TfBroadcaster:
             self._broadcaster.sendTransform(transforms)
 
 
+class RosLink:
+    """Every ROS endpoint the runners make, and tf: the engine's one door to rospy for bridges.
+
+    As the sim link owns the client, this owns the node's side. Runners use only these methods, so unit
+    tests give them a fake (tests/fakes.py) and run without a master.
+    """
+
+    def __init__(self) -> None:
+        self.tf = TfBroadcaster()
+        self.frames = TfLookup()
+
+    def publisher(
+        self,
+        name: str,
+        ros_type: str,
+        *,
+        queue_size: int,
+        latch: bool = False,
+        on_peers: Callable[[], None] | None = None,
+    ) -> Any:
+        """A publisher (`publish`, `get_num_connections`, `unregister`); `on_peers` runs whenever a
+        subscriber connects or leaves."""
+        listener = PeerListener(on_peers) if on_peers is not None else None
+        return rospy.Publisher(
+            name, message_class(ros_type), queue_size=queue_size, latch=latch, subscriber_listener=listener
+        )
+
+    def subscriber(
+        self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int
+    ) -> Any:
+        """A subscriber (`unregister`)."""
+        return rospy.Subscriber(name, message_class(ros_type), callback, queue_size=queue_size)
+
+    def service(self, name: str, srv_type: str, handler: Callable[[Any], Any]) -> tuple[Any, type]:
+        """A service (`shutdown`) and its response class."""
+        srv_class = message_class(srv_type, "srv")
+        return rospy.Service(name, srv_class, handler), srv_class._response_class
+
+    def now(self) -> Any:
+        return rospy.Time.now()
+
+    def send_tf(self, transforms: list[TransformStamped]) -> None:
+        self.tf.send(transforms)
+
+    def transform_pose(self, pose_stamped: Any, target: str) -> Any:
+        """A PoseStamped in the `target` frame, through tf (FrameUnknown when tf cannot)."""
+        return self.frames.transform_pose(pose_stamped, target)
+
+    def close(self) -> None:
+        self.frames.close()
+
+
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:
     """A TransformStamped parent -> child from a geometry_msgs/PoseStamped (same stamp)."""
     t = TransformStamped()
@@ -69,3 +124,70 @@ def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> Transform
     t.transform.rotation.x, t.transform.rotation.y = q.x, q.y
     t.transform.rotation.z, t.transform.rotation.w = q.z, q.w
     return t
+
+
+class FrameUnknown(LookupError):
+    """tf cannot transform a message's frame into the frame a command needs."""
+
+    def __init__(self, source: str, target: str, why: str) -> None:
+        super().__init__(f"frame {source!r} cannot be transformed into {target!r} with tf: {why}")
+
+
+class TfLookup:
+    """Transforms poses between tf frames. The tf listener is made on first use: a node whose goals all
+    come in the world frame never subscribes to /tf."""
+
+    def __init__(self, first_wait: float = 1.0, wait: float = 0.2) -> None:
+        self.first_wait, self.wait = first_wait, wait
+        self._buffer: tf2_ros.Buffer | None = None
+        self._listener: tf2_ros.TransformListener | None = None
+        self._lock = threading.Lock()
+
+    def _ready(self) -> tuple[tf2_ros.Buffer, float]:
+        with self._lock:
+            if self._buffer is not None:
+                return self._buffer, self.wait
+            self._buffer = tf2_ros.Buffer()
+            self._listener = tf2_ros.TransformListener(self._buffer)
+            return self._buffer, self.first_wait  # an empty buffer: give /tf time to arrive
+
+    def transform_pose(self, pose_stamped: Any, target: str) -> Any:
+        """`pose_stamped` in `target`, at its stamp (the latest transform for a zero stamp, or when tf has
+        none at that stamp: goals stamped with wall time meet transforms stamped with simulator time)."""
+        buffer, wait = self._ready()
+        source, stamp = pose_stamped.header.frame_id, pose_stamped.header.stamp
+        try:
+            try:
+                transform = buffer.lookup_transform(target, source, stamp, rospy.Duration(wait))
+            except tf2_ros.ExtrapolationException:
+                transform = buffer.lookup_transform(target, source, rospy.Time(0), rospy.Duration(wait))
+        except tf2_ros.TransformException as exc:
+            raise FrameUnknown(source, target, str(exc).splitlines()[0][:200]) from None
+        return moved_pose(pose_stamped, transform)
+
+    def close(self) -> None:
+        with self._lock:
+            if self._listener is not None:
+                self._listener.unregister()
+            self._listener = self._buffer = None
+
+
+def moved_pose(pose_stamped: Any, transform: TransformStamped) -> Any:
+    """`pose_stamped` expressed in the transform's parent frame. The pose's quaternion is composed as it is
+    (not normalised), so a zero, non-unit or non-finite goal is still refused by the converter's checks."""
+    from geometry_msgs.msg import PoseStamped
+
+    from airsim_mapper.geometry import q_mul, q_normalized, q_rotate
+
+    t, r = transform.transform.translation, transform.transform.rotation
+    rotation = q_normalized((r.w, r.x, r.y, r.z))
+    p, q = pose_stamped.pose.position, pose_stamped.pose.orientation
+    x, y, z = q_rotate(rotation, (p.x, p.y, p.z))
+    w, qx, qy, qz = q_mul(rotation, (q.w, q.x, q.y, q.z))
+    out = PoseStamped()
+    out.header.seq, out.header.stamp = pose_stamped.header.seq, pose_stamped.header.stamp
+    out.header.frame_id = transform.header.frame_id
+    out.pose.position.x, out.pose.position.y, out.pose.position.z = x + t.x, y + t.y, z + t.z
+    o = out.pose.orientation
+    o.w, o.x, o.y, o.z = w, qx, qy, qz
+    return out

@@ -7,9 +7,13 @@
   `request_async` (whose error handler disconnects the client): each call gets its own NNG context on one
   asyncio loop owned by this link, so a long motion command never blocks other requests.
 - Callbacks run on the client's receive thread; they must only hand messages over (see streams.py).
-- Receiving: the client's own receive loop ends for good on the first undecodable frame (and a callback
-  error kills it). The link runs its own loop on the client's socket instead (`_receive`, the same
-  dispatch): a malformed frame is dropped, counted in `bad_frames` and reported at most every 5 s.
+- Receiving: the client's own receive loop decodes every frame element by element and ends for good on
+  the first undecodable frame (or a failing callback). The bridge's loop (`receive`, the same dispatch)
+  replaces it whatever the order in which a mission script made `World` and the bridge: a malformed frame,
+  or one of a type other than MESSAGE, is dropped, counted in `bad_frames` and reported at most every 5 s;
+  a frame over `FrameCounts.max_frame_bytes` is dropped before it is unpacked and counted in
+  `oversized_frames` (the engine keeps the counts across reconnects); large frames that only the bridge
+  listens to skip msgpack's per-element lists; every other callback gets what the client would give it.
 - Liveness: the link notices when a connection drops (an NNG pipe removal on either socket: the server
   died or restarted) and offers a cheap `probe`. A link marked dead answers every call at once with
   SimLinkError instead of waiting on sockets that will never answer (see health.py and Engine's reconnect).
@@ -26,16 +30,32 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.fast_frames import decode_map
+from airsim_mapper.engine.health import PROBE_METHOD
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
-PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 WARN_PERIOD_S = 5.0
+RECEIVE_THREAD = "sim-receive"
+CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
+TAKE_OVER_WAIT_S = 1.0
+CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
+MAX_FRAME_MB = 64.0  # default cap on one simulator frame (a 4K BGR image is 25 MB)
+MESSAGE_FRAME = 2  # projectairsim.types.FrameType.MESSAGE: the only type a server sends to a client
+
+
+@dataclass
+class FrameCounts:
+    """Simulator frames the bridge refused, kept by the engine across reconnects (status, /diagnostics)."""
+
+    max_frame_bytes: int = int(MAX_FRAME_MB * 1024 * 1024)
+    bad: int = 0  # undecodable, of an unknown type, or a callback failed
+    oversized: int = 0  # over max_frame_bytes, or an image over its pixel bound
 
 
 class SimLinkError(RuntimeError):
@@ -52,8 +72,9 @@ class SimLinkDead(SimLinkError):
 class SimLink:
     """Reference-counted topic subscriptions and concurrent service calls on a shared client."""
 
-    def __init__(self, client: Any) -> None:
+    def __init__(self, client: Any, counts: FrameCounts | None = None) -> None:
         self.client = client
+        self.counts = counts or FrameCounts()
         self._lock = threading.RLock()
         self._ours: dict[str, list[TopicCallback]] = {}
         self._loop = asyncio.new_event_loop()
@@ -70,7 +91,6 @@ class SimLink:
         ]
         for sock in self._watched:
             sock.add_post_pipe_remove_cb(self._on_pipe_removed)
-        self.bad_frames = 0
         self.fast_frames = 0  # frames decoded on the fast path
         self._last_warning = -1e9
         self._unreported = 0
@@ -78,76 +98,82 @@ class SimLink:
 
     # --- receiving --------------------------------------------------------------------------
     def ensure_receiver(self) -> bool:
-        """Run our receive loop on the client unless a live one runs already; True if one was started."""
+        """Make the bridge's receive loop the client's, whoever started receiving; True if it started.
+
+        The loop dispatches through the client's current link (this one from now on). With no receive
+        thread yet, it gets its own thread, which the client then keeps using. A thread the client started
+        itself (a mission script that made `World` first) is taken over: its per-frame read is replaced, so
+        that thread runs this loop instead of the client's, which would decode every frame element by
+        element and stop for good on the first undecodable one.
+        """
         client = self.client
-        thread = getattr(client, "recv_topic_thread", None)
-        if self.dead or client.socket_topics is None or (thread is not None and thread.is_alive()):
+        if self.dead or client.socket_topics is None:
             return False
+        setattr(client, CURRENT_LINK, self)
+        thread = getattr(client, "recv_topic_thread", None)
+        if thread is not None and thread.is_alive():
+            return _take_over(client)
         if thread is not None and not client.state:
             return False  # disconnected on purpose
         client.socket_topics.recv_timeout = 100  # bounded block so the loop sees `state` change
-        client.recv_topic_thread = threading.Thread(target=self._receive, name="sim-receive", daemon=True)
+        client.recv_topic_thread = threading.Thread(target=receive, args=(client,), name=RECEIVE_THREAD)
+        client.recv_topic_thread.daemon = True
         client.recv_topic_thread.start()
         if thread is not None:
             self._bad_frame("the client's receive loop had stopped; receiving again")
         return True
 
-    def _receive(self) -> None:
+    def dispatch(self, packed: bytes) -> None:
+        """One frame off the topics socket: decode it and hand the message to the topic's callbacks."""
         import msgpack
-        import pynng
 
-        client, sock = self.client, self.client.socket_topics
-        while client.state:
-            try:
-                packed = sock.recv()
-            except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
-                continue
-            except pynng.exceptions.Closed:
+        client = self.client
+        if len(packed) > self.counts.max_frame_bytes:
+            self.counts.oversized += 1
+            self._warn(
+                f"a {len(packed) / 1048576:.1f} MB frame dropped: over the "
+                f"{self.counts.max_frame_bytes / 1048576:g} MB limit (--max-frame-mb)"
+            )
+            return
+        try:
+            frame = msgpack.unpackb(packed, raw=True)
+            if frame[0] != MESSAGE_FRAME:
+                self._bad_frame(f"frame of unknown type {frame[0]!r} dropped (only MESSAGE is expected)")
                 return
-            except pynng.exceptions.NNGException as exc:
-                self._bad_frame(f"receive failed: {exc}")
-                continue
+            topic = frame[1].decode("utf-8")
+            entry = client.subs.get(topic)
+            if entry is None:
+                return
+            message = self._decode(topic, entry, frame[2])
+        except Exception as exc:
+            self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
+            return
+        info = client.topics.get(topic) or _unknown_topic(topic)
+        for callback in entry["callbacks"]:
             try:
-                frame = msgpack.unpackb(packed, raw=True)
-                topic = frame[1].decode("utf-8")
-                entry = client.subs.get(topic)
-                if entry is None:
-                    continue
-                message = self._decode(topic, entry, frame[2])
+                callback(info, message)
             except Exception as exc:
-                self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
-                continue
-            info = client.topics.get(topic) or _unknown_topic(topic)
-            for callback in entry["callbacks"]:
-                try:
-                    callback(info, message)
-                except Exception as exc:
-                    self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
+                self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
 
     def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
-        """The message of a frame body. Large bodies that only the bridge listens to are decoded with
-        their float/int arrays straight into numpy (fast_frames.decode_map), skipping the per-element
-        Python lists msgpack would build (docs/performance.md has the cost), and their large bin values
-        (image pixels) as memoryviews of the body, which the image converter publishes without a copy.
-        Everything else, and anything unusual, takes msgpack's path, exactly as the client would."""
-        import msgpack
-
-        if len(body) >= FAST_MIN_BYTES and self._only_ours(topic, entry["callbacks"]):
-            try:
-                message = decode_map(body, views=True)
-            except Exception:
-                message = None
-            if message is not None:
-                self.fast_frames += 1
-                return message
-        return msgpack.unpackb(body, raw=False)
+        message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))
+        self.fast_frames += fast
+        return message
 
     def _only_ours(self, topic: str, callbacks: list) -> bool:
         ours = self._ours.get(topic, ())
         return bool(callbacks) and all(cb in ours for cb in callbacks)
 
+    @property
+    def bad_frames(self) -> int:
+        return self.counts.bad
+
     def _bad_frame(self, message: str) -> None:
-        self.bad_frames += 1
+        self.counts.bad += 1
+        self._warn(message)
+
+    def _warn(self, message: str) -> None:
+        """Log a dropped frame at most once per WARN_PERIOD_S, with a count of those held back."""
         now = time.monotonic()
         if now - self._last_warning < WARN_PERIOD_S:
             self._unreported += 1
@@ -337,6 +363,83 @@ class SimLink:
                         self.client.subs.pop(topic, None)
         self.stop_loop()
         return answered
+
+
+def decode_body(body: bytes, fast: bool) -> tuple[Any, bool]:
+    """The message of a frame body, and whether it took the fast path.
+
+    With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
+    straight into numpy (fast_frames.decode_map), skipping the per-element Python lists msgpack would
+    build (docs/performance.md has the cost), and its large bin values (image pixels) as memoryviews of
+    the body, which the image converter publishes without a copy. Everything else, and anything unusual,
+    takes msgpack's path, exactly as the client would.
+    """
+    import msgpack
+
+    if fast and len(body) >= FAST_MIN_BYTES:
+        try:
+            message = decode_map(body, views=True)
+        except Exception:
+            message = None
+        if message is not None:
+            return message, True
+    return msgpack.unpackb(body, raw=False), False
+
+
+def receive(client: Any) -> None:
+    """The bridge's receive loop on a client's topics socket, until the client stops or the socket closes.
+
+    Each frame goes to the client's current link (`SimLink.dispatch`): a malformed frame or a failing
+    callback is dropped and counted there, and the loop goes on.
+    """
+    import pynng
+
+    sock = client.socket_topics
+    while client.state:
+        try:
+            packed = sock.recv()
+        except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
+            continue
+        except pynng.exceptions.Closed:
+            return
+        except pynng.exceptions.NNGException as exc:
+            getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
+            continue
+        getattr(client, CURRENT_LINK).dispatch(packed)
+
+
+def _take_over(client: Any) -> bool:
+    """Make the client's own receive thread run `receive`; True if it was not doing so already.
+
+    The client's loop reads each frame through its private `__recv_topic_frame` and then decodes and
+    dispatches it itself. An instance attribute of that name shadows the method: the thread's next read
+    enters `receive` and stays there until the client stops; the frame read before the swap is the
+    client's last, and this call waits for the swap. A client without that method (another version)
+    keeps its own loop, with a warning.
+    """
+    if getattr(client.recv_topic_thread, "name", "") == RECEIVE_THREAD or CLIENT_READ in vars(client):
+        return False
+    if not callable(getattr(type(client), CLIENT_READ, None)):
+        log.warning("this projectairsim client has no %s: its own receive loop stays in use", CLIENT_READ)
+        vars(client)[CLIENT_READ] = None  # warns once; a client without the method never reads it
+        return False
+
+    entered = threading.Event()
+
+    def read() -> None:
+        entered.set()
+        receive(client)
+        if client.state:  # the socket closed under a live client: the client's loop would spin
+            time.sleep(0.1)
+
+    vars(client)[CLIENT_READ] = read
+    # The client's thread reads again within its 100 ms receive timeout; until then a frame would still
+    # be the client's to decode, so the bridge subscribes nothing before the swap has happened.
+    if not entered.wait(TAKE_OVER_WAIT_S):
+        log.warning(
+            "the client's receive thread did not pick up the bridge's loop within %g s", TAKE_OVER_WAIT_S
+        )
+    return True
 
 
 def _unknown_topic(topic: str) -> Any:

@@ -2,7 +2,9 @@
 
 Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
 "unresponsive: ..." while it is open), reconnects, sim_losses, stalls (times the simulator stopped
-answering on an open connection), master_reregistrations, and per simulator topic stream: received,
+answering on an open connection), master_reregistrations, bad_frames and oversized_frames (simulator
+frames dropped: undecodable, or over --max-frame-mb / an image's max_pixels), sim_time_jumps_back and
+sim_time_last_jump_back_s (/clock going backwards, see simtime.py), and per simulator topic stream: received,
 dropped, handled, errors, age_s (seconds since its last message), and the peaks since the previous
 status: arrival_gap_max_ms (longest interval between two arrivals), wait_max_ms (longest wait for the
 worker), handle_max_ms (longest handling). Published on every state change and once a second, by a
@@ -27,13 +29,12 @@ def status_topic(node_name: str) -> str:
 class StatusPublisher:
     """Publishes status dicts as JSON; skips nothing, so subscribers see every change."""
 
-    def __init__(self, node_name: str) -> None:
-        import rospy
+    def __init__(self, ros: Any, node_name: str) -> None:
         from std_msgs.msg import String
 
         self._string = String
         self._lock = threading.Lock()
-        self.publisher = rospy.Publisher(status_topic(node_name), String, queue_size=2, latch=True)
+        self.publisher = ros.publisher(status_topic(node_name), "std_msgs/String", queue_size=2, latch=True)
 
     def publish(self, status: dict[str, Any]) -> None:
         text = json.dumps(status, sort_keys=True)

@@ -29,6 +29,7 @@ from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
+IMAGE_CONVERTERS = ("image", "streaming_image")  # take params.max_pixels
 
 
 GENPY_HEADER_BYTES = 512
@@ -223,6 +224,19 @@ class _Checker:
     def _options(self, rule: Rule, base: tuple[Any, ...]) -> None:
         raw = self.data["rules"][base[1]]
         self.position_box(base, raw.get("limits"), f"rule '{rule.name}'")
+        if "max_pixels" in rule.params:
+            value = rule.params["max_pixels"]
+            if rule.converter not in IMAGE_CONVERTERS:
+                self.add(
+                    (*base, "params", "max_pixels"),
+                    f"rule '{rule.name}': params.max_pixels applies only to the image converters",
+                    True,
+                )
+            elif isinstance(value, bool) or not isinstance(value, int) or value <= 0:
+                self.add(
+                    (*base, "params", "max_pixels"),
+                    f"rule '{rule.name}': params.max_pixels must be a positive integer, got {value!r}",
+                )
         if rule.direction == SIM_TO_ROS:
             for key in ("watchdog_s", "limits"):
                 if raw.get(key) is not None:

@@ -1,7 +1,8 @@
 """Expand mapping rules over a scene into concrete bridges: pure, deterministic, free of ROS imports.
 
-Order: rules in file order; within a rule, scene elements in scene order (robots, then their sensors, then
-capture settings). Domains:
+Without a scene (`scene=None`) only the node-domain rules expand: the bridges a node runs before any scene
+is loaded (load_scene). Order: rules in file order; within a rule, scene elements in scene order (robots,
+then their sensors, then capture settings). Domains:
 - node: once, named `<rule>[<node_name>]`; scene: once, `<rule>[<scene_name>]`;
 - robot: per robot, `<rule>[<robot>]`, source = the actor entry (name, origin, ...) without its robot-config;
 - first_robot: once per scene with a robot, for the first robot, `<rule>[<scene_name>]`, source as robot;
@@ -98,12 +99,15 @@ def _streaming_elements(scene: Scene, base: dict[str, str]) -> Iterator[Element]
 
 
 def elements(
-    rule: Rule, mapping: MappingDoc, scene: Scene, node_name: str, namespace: str
+    rule: Rule, mapping: MappingDoc, scene: Scene | None, node_name: str, namespace: str
 ) -> Iterator[Element]:
-    """The scene elements `rule` expands over, each with its name key, variables and source."""
+    """The scene elements `rule` expands over, each with its name key, variables and source (none for a
+    scene-domain rule when there is no scene)."""
     base = {"node_name": node_name, **namespace_variables(namespace)}
     if rule.domain == "node":
         yield node_name, base, {}
+        return
+    if scene is None:
         return
     base["scene_name"] = scene.name
     if rule.domain == "scene":
@@ -153,8 +157,11 @@ def namespace_variables(namespace: str) -> dict[str, str]:
     return {"namespace": f"/{ns}" if ns else "", "frame_prefix": f"{ns}/" if ns else ""}
 
 
-def expand(mapping: MappingDoc, scene: Scene, node_name: str, namespace: str = "") -> tuple[BridgeSpec, ...]:
-    """All concrete bridges of `mapping` over `scene`; MappingError when names are illegal or collide."""
+def expand(
+    mapping: MappingDoc, scene: Scene | None, node_name: str, namespace: str = ""
+) -> tuple[BridgeSpec, ...]:
+    """All concrete bridges of `mapping` over `scene` (only the node's own without one); MappingError when
+    names are illegal or collide."""
     bridges: list[BridgeSpec] = []
     problems: list[Problem] = []
     owners: dict[str, BridgeSpec] = {}

@@ -18,3 +18,13 @@ def ros_name_problem(name: str) -> str | None:
     if name.endswith("/"):
         return "it ends with '/'"
     return None
+
+
+def resolve_namespace(namespace: str, node_namespace: str = "/") -> str:
+    """A node's `--namespace` resolved like a ROS name inside the node's own ROS namespace: absolute
+    (`/sim1`) as given, relative (`sim1`) below the node's namespace, empty as the node's namespace itself.
+    The result is "" for the root, else `/a/b` (the <namespace> template variable)."""
+    name = namespace.strip()
+    full = name if name.startswith("/") else f"{node_namespace}/{name}"
+    parts = [part for part in full.split("/") if part]
+    return "/" + "/".join(parts) if parts else ""

@@ -60,9 +60,10 @@ def test_camera_info_without_width_is_rejected():
         camera_info({"time_stamp": 0, "height": 480}, ctx())
 
 
-def test_zero_size_is_rejected():
-    with pytest.raises(ConversionError, match=r"camera_info: size 0x480 must be positive"):
-        camera_info({"time_stamp": 0, "width": 0, "height": 480}, ctx())
+@pytest.mark.parametrize("width, height", [(0, 480), (2**32, 1), (640, -1)])
+def test_a_size_that_is_not_a_positive_uint32_is_rejected(width, height):
+    with pytest.raises(ConversionError, match=rf"camera_info: size {width}x{height} must be positive"):
+        camera_info({"time_stamp": 0, "width": width, "height": height}, ctx())
 
 
 @pytest.mark.parametrize("fov", [0, 180, -5])

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from airsim_mapper.convert.context import ConvertContext
-from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.image import image
+from airsim_mapper.convert.errors import ConversionError, OversizedData
+from airsim_mapper.convert.image import MAX_PIXELS, image, png_size
 
 CTX = ConvertContext(frame_id="airsim_node/Drone1/FrontCamera/scene_camera")
 
@@ -128,9 +128,62 @@ def test_unknown_encoding_is_rejected_listing_the_known_ones():
         image(sim_image("YUV", b"", 0, 0), CTX)
 
 
-def test_corrupt_png_is_rejected():
-    with pytest.raises(ConversionError, match=r"image: PNG data could not be decoded"):
+def test_data_that_is_not_a_png_is_rejected_before_decoding():
+    with pytest.raises(ConversionError, match=r"image: PNG data does not start with the PNG signature"):
         image(sim_image("PNG", b"not a png", 4, 3), CTX)
+
+
+def test_corrupt_png_is_rejected():
+    _ok, png = cv2.imencode(".png", np.zeros((3, 4, 3), dtype=np.uint8))
+    broken = png.tobytes()[:40] + b"\0" * 30
+    with pytest.raises(ConversionError, match=r"image: PNG data could not be decoded"):
+        image(sim_image("PNG", broken, 4, 3), CTX)
+
+
+def test_a_png_header_is_read_without_decoding():
+    _ok, png = cv2.imencode(".png", np.zeros((3, 4, 3), dtype=np.uint8))
+    assert png_size(png.tobytes()) == (4, 3)
+    with pytest.raises(ConversionError, match=r"image: PNG data is 20 bytes, too short for its header"):
+        png_size(png.tobytes()[:20])
+    with pytest.raises(ConversionError, match=r"image: PNG's first chunk is b'IDAT', not IHDR"):
+        png_size(png.tobytes()[:12] + b"IDAT" + png.tobytes()[16:])
+
+
+def png_claiming(width: int, height: int) -> bytes:
+    """A small real PNG whose IHDR says width x height (a decompression bomb's header)."""
+    _ok, png = cv2.imencode(".png", np.zeros((2, 2, 3), dtype=np.uint8))
+    data = bytearray(png.tobytes())
+    data[16:24] = width.to_bytes(4, "big") + height.to_bytes(4, "big")
+    return bytes(data)
+
+
+def test_a_png_whose_header_differs_from_the_message_is_not_decoded(monkeypatch):
+    monkeypatch.setattr(cv2, "imdecode", lambda *_: pytest.fail("decoded"))
+    with pytest.raises(
+        ConversionError, match=r"image: PNG header says 16000x16000, the message 2x2; not decoded"
+    ):
+        image(sim_image("PNG", png_claiming(16000, 16000), 2, 2), CTX)
+
+
+def test_an_image_over_max_pixels_is_oversized_before_anything_is_decoded(monkeypatch):
+    monkeypatch.setattr(cv2, "imdecode", lambda *_: pytest.fail("decoded"))
+    with pytest.raises(OversizedData, match=rf"image: 16000x16000 is over the limit of {MAX_PIXELS} pixels"):
+        image(sim_image("PNG", png_claiming(16000, 16000), 16000, 16000), CTX)
+    with pytest.raises(OversizedData, match=r"image: 20000x20000 is over"):
+        image(sim_image("BGR", b"", 20000, 20000), CTX)
+
+
+def test_a_rule_may_set_its_own_max_pixels():
+    ctx = ConvertContext(params={"max_pixels": 11})
+    with pytest.raises(OversizedData, match=r"image: 4x3 is over the limit of 11 pixels \(max_pixels\)"):
+        image(sim_image("BGR", bytes(36), 4, 3), ctx)
+    assert image(sim_image("BGR", bytes(36), 4, 3), ConvertContext(params={"max_pixels": 12})).width == 4
+
+
+@pytest.mark.parametrize("width, height", [(0, 0), (0, 360), (640, 0)])
+def test_an_image_without_pixels_is_dropped(width, height):
+    with pytest.raises(ConversionError, match=rf"image: size {width}x{height} has no pixels"):
+        image(sim_image("BGR", b"", width, height), CTX)
 
 
 def test_empty_png_is_rejected():
@@ -140,12 +193,12 @@ def test_empty_png_is_rejected():
 
 def test_png_of_another_size_is_rejected():
     _ok, png = cv2.imencode(".png", np.zeros((3, 4, 3), dtype=np.uint8))
-    with pytest.raises(ConversionError, match=r"image: PNG decodes to 4x3, expected 5x3"):
+    with pytest.raises(ConversionError, match=r"image: PNG header says 4x3, the message 5x3; not decoded"):
         image(sim_image("PNG", png.tobytes(), 5, 3), CTX)
 
 
 def test_missing_data_is_rejected():
-    msg = sim_image("BGR", b"", 0, 0)
+    msg = sim_image("BGR", b"", 1, 1)
     del msg["data"]
     with pytest.raises(ConversionError, match=r"image: image has no 'data'"):
         image(msg, CTX)
@@ -228,7 +281,6 @@ def test_images_go_on_the_wire_byte_for_byte_as_genpy_writes_them():
         "16FC1": sim_image("16FC1", depth.tobytes(), 4, 3),
         "32FC1 data_float": sim_image("32FC1", b"", 4, 3, data_float=depth.astype(np.float32).tolist()),
         "GRAY8": sim_image("GRAY8", bytes(range(12)), 4, 3),
-        "empty": sim_image("BGR", b"", 0, 0),
     }
     for name, sim in cases.items():
         msg = image(sim, CTX)

@@ -310,3 +310,30 @@ def test_a_frozen_heap_is_skipped_by_full_collections_and_thawing_frees_old_cycl
     assert int(frozen) > 200_000 and int(thawed) == 0
     assert faster == "True"  # the 200,000 frozen lists are no longer walked
     assert held == "True" and freed == "True"  # a frozen cycle waits for the thaw, then is collected
+
+
+ENGINE_PROBE = """
+import sys, types, rospy.topics
+from airsim_mapper.tuning import blas_threads
+from airsim_mapper.engine.engine import Engine
+from airsim_mapper.mapping.loader import load_mapping
+from airsim_mapper.resources import DEFAULT_MAPPING
+client = types.SimpleNamespace(socket_topics=None, socket_services=None, subs={}, topics={}, state=True)
+before = blas_threads()
+engine = Engine(client, load_mapping(DEFAULT_MAPPING), "sim_config", "probe", tune=sys.argv[1] == "tune")
+blas = "kept" if blas_threads() == before else ",".join(map(str, blas_threads()))
+print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__, blas, engine._freeze_heap)
+"""
+
+
+@pytest.mark.live
+def test_only_an_engine_asked_to_tune_changes_the_process() -> None:
+    """A mission script's wrapper leaves the interpreter, rospy and BLAS alone; the node's tunes them."""
+    run = {"capture_output": True, "text": True, "check": True, "timeout": 60}
+    env = {k: v for k, v in os.environ.items() if k != "AIRSIM_MAPPER_NO_TUNING"}
+    plain = subprocess.run([sys.executable, "-c", ENGINE_PROBE, "plain"], env=env, **run).stdout.split()
+    assert float(plain[0]) == pytest.approx(0.005) and plain[1] == "QueuedConnection"
+    assert plain[2:] == ["kept", "False"]
+    tuned = subprocess.run([sys.executable, "-c", ENGINE_PROBE, "tune"], env=env, **run).stdout.split()
+    assert float(tuned[0]) == pytest.approx(SWITCH_INTERVAL_S) and tuned[1] == "PromptQueuedConnection"
+    assert tuned[2] in ("kept", "1") and tuned[3] == "True"  # "kept" on a one-core host

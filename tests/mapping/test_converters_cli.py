@@ -1,4 +1,4 @@
-"""airsim-mapper converters: the converter catalogue as Markdown, and the README's table generated from it."""
+"""airsim-mapper converters: the converter catalogue as Markdown, and docs/converters.md generated from it."""
 
 from __future__ import annotations
 
@@ -7,21 +7,33 @@ import re
 from harness import ROOT
 
 from airsim_mapper.cli.main import main
-from airsim_mapper.convert.catalog import CONVERTERS, ROS_TO_SIM, SIM_TO_ROS, ConverterInfo, markdown_table
+from airsim_mapper.convert.catalog import (
+    CONVERTERS,
+    PUBLISH,
+    ROS_TO_SIM,
+    SERVE,
+    SIM_TO_ROS,
+    ConverterInfo,
+    markdown_table,
+)
 
 BEGIN, END = "<!-- converters:begin -->", "<!-- converters:end -->"
 
 
-def readme_table() -> str:
-    """The text between the README's converter-table markers, without the blank lines around it."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    assert text.count(BEGIN) == 1 and text.count(END) == 1, f"README.md needs one {BEGIN} and one {END}"
+DOC = ROOT / "docs" / "converters.md"
+
+
+def documented_table() -> str:
+    """The text between the converter-table markers of docs/converters.md, without the blank lines
+    around it."""
+    text = DOC.read_text(encoding="utf-8")
+    assert text.count(BEGIN) == 1 and text.count(END) == 1, f"{DOC} needs one {BEGIN} and one {END}"
     return text.split(BEGIN, 1)[1].split(END, 1)[0].strip("\n") + "\n"
 
 
-def test_the_readme_converter_table_equals_the_catalogue():
-    assert readme_table() == markdown_table(), (
-        f"README.md's converter table is out of date: replace the lines between {BEGIN} and {END} "
+def test_the_documented_converter_table_equals_the_catalogue():
+    assert documented_table() == markdown_table(), (
+        f"docs/converters.md is out of date: replace the lines between {BEGIN} and {END} "
         "with the output of `airsim-mapper converters`"
     )
 
@@ -41,8 +53,8 @@ def test_the_table_has_one_row_per_converter_in_catalogue_order():
 
 def test_a_row_names_the_direction_and_every_ros_type_and_escapes_bars_in_the_summary():
     services = ("std_srvs/Trigger", "std_srvs/Empty")
-    two_types = ConverterInfo("x", ROS_TO_SIM, services, "service", "m", "f", "a | b")
-    one_type = ConverterInfo("y", SIM_TO_ROS, ("sensor_msgs/Image",), "node", "m", "f", "s")
+    two_types = ConverterInfo("x", ROS_TO_SIM, services, SERVE, "m", "f", "a | b")
+    one_type = ConverterInfo("y", SIM_TO_ROS, ("sensor_msgs/Image",), PUBLISH, "m", "f", "s")
     rows = markdown_table([two_types, one_type]).splitlines()[2:]
     assert rows == [
         "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | a \\| b |",

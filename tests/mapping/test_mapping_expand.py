@@ -7,7 +7,7 @@ from scene_builders import camera, capture
 
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.expand import expand
-from airsim_mapper.mapping.loader import load_mapping_text
+from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
 from airsim_mapper.scene import read_scene
 
 HEADER = "version: 1\nrules:\n"
@@ -197,3 +197,13 @@ def test_template_strings_in_params_are_rendered_per_element_and_other_values_ar
     }
     takeoff = next(b for b in bridges if b.params.get("method") == "Takeoff")
     assert takeoff.params == {"method": "Takeoff", "args": {"timeout_sec": 20}}
+
+
+def test_without_a_scene_only_the_node_rules_expand():
+    from airsim_mapper.resources import DEFAULT_MAPPING
+
+    mapping = load_mapping(DEFAULT_MAPPING)
+    bridges = expand(mapping, None, "bridge", "sim1")
+    assert [(b.name, b.ros) for b in bridges] == [
+        ("load_scene[bridge]", "/sim1/ProjectAirSim/node/bridge/load_scene")
+    ]

@@ -171,3 +171,33 @@ def test_a_type_naming_an_installed_module_that_is_no_message_package_is_refused
     with pytest.raises(MappingError, match=r"'trap_pkg' is not a ROS message package"):
         load_mapping_text(text, "m.yaml")
     assert not ran.exists()
+
+
+IMAGE_RULE = """
+version: 1
+rules:
+  - name: camera_image
+    for_each: camera_capture
+    direction: sim_to_ros
+    sim: /Sim/<scene_name>/robots/<robot_name>/sensors/<camera_name>/<sim_image_type>
+    ros: /airsim_node/<robot_name>/<camera_name>/<image_type>
+    type: sensor_msgs/Image
+    converter: image
+    params: {max_pixels: PIXELS}
+"""
+
+
+def test_an_image_rule_may_bound_its_pixels_and_a_bad_bound_is_a_located_error():
+    rule = load_mapping_text(IMAGE_RULE.replace("PIXELS", "1000000"), "m.yaml").rules[0]
+    assert rule.params["max_pixels"] == 1_000_000
+    for bad in ("0", "-5", "1.5", "lots", "true"):
+        with pytest.raises(MappingError) as err:
+            load_mapping_text(IMAGE_RULE.replace("PIXELS", bad), "m.yaml")
+        assert str(err.value).startswith(
+            "m.yaml:11:26: rule 'camera_image': params.max_pixels must be a positive integer, got "
+        ), bad
+    with pytest.raises(MappingError) as err:
+        load_mapping_text(CMD_VEL.replace("{frame: world}", "{frame: world, max_pixels: 5}"), "m.yaml")
+    assert str(err.value) == (
+        "m.yaml:14:28: rule 'cmd_vel': params.max_pixels applies only to the image converters"
+    )

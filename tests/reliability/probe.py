@@ -3,6 +3,7 @@
 probe.py watch TOPIC           print "MSG <wall time>" for every message on TOPIC (any type)
 probe.py status NODE           print "STATUST <wall time>" and "STATUS <json>" for every status message of
                                bridge node NODE
+probe.py diagnostics NODE      print "DIAG <json>" for every /diagnostics entry of NODE's simulator
 probe.py twist TOPIC N VX [FRAME]   publish N geometry_msgs/Twist at 10 Hz (VX may be nan, inf),
                                then print "LAST <wall time>" and keep the publisher until killed
 probe.py pose TOPIC X Y Z QW QX QY QZ [FRAME]   publish one PoseStamped 3 times, print "SENT"
@@ -43,6 +44,20 @@ def status(node: str) -> None:
         print(f"STATUST {time.time():.4f}\nSTATUS {message.data}", flush=True)
 
     rospy.Subscriber(f"/airsim_mapper/{node}/status", String, show)
+    rospy.spin()
+
+
+def diagnostics(node: str) -> None:
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    def show(array: DiagnosticArray) -> None:
+        for entry in array.status:
+            if entry.name == f"{node}: simulator":
+                values = {kv.key: kv.value for kv in entry.values}
+                report = {"level": entry.level, "message": entry.message, "values": values}
+                print(f"DIAG {json.dumps(report)}", flush=True)
+
+    rospy.Subscriber("/diagnostics", DiagnosticArray, show)
     rospy.spin()
 
 
@@ -181,6 +196,8 @@ def main(argv: list[str]) -> None:
         watch(args[0])
     elif mode == "status":
         status(args[0])
+    elif mode == "diagnostics":
+        diagnostics(args[0])
     elif mode == "twist":
         twist(args[0], int(args[1]), float(args[2]))
         rospy.spin()

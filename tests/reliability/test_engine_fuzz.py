@@ -7,11 +7,12 @@ import threading
 from typing import Any
 
 import pytest
+from fakes import FakeRos
 from harness import wait_until
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from airsim_mapper.engine.bridges import Services, SimToRos, StreamingImage
+from airsim_mapper.engine.bridges import Services, SimToRos, build
 from airsim_mapper.engine.streams import Stream
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
@@ -81,19 +82,9 @@ class NoSim:
 
 @pytest.fixture(scope="module")
 def bridges() -> list[SimToRos]:
-    import rospy.rostime
-
-    rospy.rostime.set_rostime_initialized(True)  # stamp "ros" bridges read the clock; no master needed
     specs = expand(load_mapping(DEFAULT_MAPPING), read_scene(PROJECT_SIM_CONFIG, SCENE), "fuzz", "")
-    services = Services(NoSim(), NoSim(), NoSim(), {}, lambda *_: None)
-    out: list[SimToRos] = []
-    for spec in specs:
-        if spec.direction == SIM_TO_ROS:
-            out.append(
-                StreamingImage(spec, services)
-                if spec.converter == "streaming_image"
-                else SimToRos(spec, services)
-            )
+    services = Services(NoSim(), NoSim(), FakeRos(), {}, lambda *_: None)  # "ros" stamps read its clock
+    out = [build(spec, services) for spec in specs if spec.direction == SIM_TO_ROS]
     assert {b.spec.converter for b in out} >= {"pose", "image", "pointcloud", "radar_scan", "camera_info"}
     return out
 

@@ -20,7 +20,7 @@ from airsim_mapper.engine.health import (
     Verdict,
     open_client,
 )
-from airsim_mapper.engine.reregister import ReregisterError, _check
+from airsim_mapper.engine.reregister import ReregisterError, _check, needs_registration
 from airsim_mapper.engine.sim_link import SimLink, SimLinkDead
 from airsim_mapper.engine.status import status_topic
 
@@ -111,6 +111,14 @@ def test_a_master_refusal_names_what_was_refused():
     assert _check("publisher", "/a", [1, "ok", 7]) == 7
     with pytest.raises(ReregisterError, match=r"^the master refused to register subscriber /b: nope$"):
         _check("subscriber", "/b", [-1, "nope", 0])
+
+
+def test_a_master_that_does_not_know_the_node_is_new_even_with_the_same_pid():
+    assert needs_registration(known=False, pid=42, last_pid=42)  # a container's restarted master
+    assert needs_registration(known=True, pid=43, last_pid=42)
+    assert not needs_registration(known=True, pid=42, last_pid=42)
+    assert not needs_registration(known=None, pid=None, last_pid=42)  # no answer: nothing to do yet
+    assert not needs_registration(known=False, pid=None, last_pid=42)
 
 
 def test_the_status_topic_lives_under_the_node_name():

@@ -44,17 +44,13 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
     with bench.bridge_session(single, profile=profile("lidar")) as session:
         out["bridge"]["lidar"] = session.probe("lidar", [scenes.lidar_topic(1)])
-    with bench.bridge_session(single, fast_frames=False) as session:
+    with bench.bridge_session(single, decode="client") as session:
         out["bridge"]["lidar_client_path"] = session.probe("lidar_client", [scenes.lidar_topic(1)])
+    loaded = [scenes.pose_topic(1), scenes.image_topic(1)]
     with bench.bridge_session(load, profile=profile("load")) as session:  # 1080p at 60 Hz: saturating
-        out["pose"]["camera_load"] = session.probe("pose_load", [scenes.pose_topic(1), scenes.image_topic(1)])
-
-    load_pose = "/Sim/BenchLoad/robots/Drone1/actual_pose"
-    load_camera = "/Sim/BenchLoad/robots/Drone1/sensors/Cam/scene_camera"
-    out["client_pose"] = {
-        "client_path": bench.client_pose_run(load, load_pose, load_camera, fast_frames=False),
-        "fast_frames": bench.client_pose_run(load, load_pose, load_camera, fast_frames=True),
-    }
+        out["pose"]["camera_load"] = session.probe("pose_load", loaded)
+    with bench.bridge_session(load, runner="mission", profile=profile("mission")) as session:
+        out["pose"]["camera_load_mission"] = session.probe("pose_load_mission", loaded)
 
     for drones in SCALE_DRONES:
         scene = bench.scene(f"scale{drones}", drones, scenes.CameraSetup(320, 240, 1 / SCALE_CAMERA_HZ, (0,)))

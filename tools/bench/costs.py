@@ -1,8 +1,8 @@
 """Per-message CPU cost, from the simulator's frame bytes to a serialised ROS message (one process).
 
 Each case is one frame, packed exactly as the headless server (and the C++ server) packs it, taken through:
-- bridge: the fast-frames proxy, the client's own unpacking of the (small) frame it returns, resolve, the
-  bridge's converter and genpy serialisation;
+- bridge: the bridge's receive loop decoding (`sim_link.decode_body`: large bodies straight into numpy
+  arrays and pixel views), the bridge's converter and genpy serialisation;
 - client: the client's msgpack unpacking of the full frame, the bridge's converter, serialisation;
 - reference: the client's unpacking, the old bridge's algorithm (reference.py), serialisation;
 - bare: genpy serialisation of an already built message holding the same data (what rospy alone costs).
@@ -26,9 +26,9 @@ from airsim_mapper.convert import registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.image import BufferImage
+from airsim_mapper.engine.sim_link import decode_body
 from airsim_mapper.simserver import protocol
 from tools.bench import reference
-from tools.bench.recv_proxy import FastFrames
 
 FULL_HD = (1920, 1080)
 SMALL = (320, 240)  # the per-pixel reference runs here and is scaled by the pixel count
@@ -175,13 +175,17 @@ def cpu_ms(fn: Callable[[], Any], repeat: int) -> float:
     return statistics.median(samples)
 
 
-def measure_case(case: Case, fast: FastFrames) -> dict[str, Any]:
+def bridge_unpack(frame: bytes) -> Any:
+    """A frame's message as the bridge's receive loop decodes it (sim_link.receive -> decode_body)."""
+    return decode_body(msgpack.unpackb(frame, raw=True)[2], fast=True)[0]
+
+
+def measure_case(case: Case) -> dict[str, Any]:
     convert = registry.get(case.converter)
     ctx = ConvertContext(frame_id="bench")
 
     def bridge() -> bytes:
-        message = fast.resolve(client_unpack(fast.rewrite(case.frame)))
-        return serialize(convert(message, ctx))
+        return serialize(convert(bridge_unpack(case.frame), ctx))
 
     def client() -> bytes:
         return serialize(convert(client_unpack(case.frame), ctx))
@@ -192,7 +196,7 @@ def measure_case(case: Case, fast: FastFrames) -> dict[str, Any]:
         "client_path_ms": cpu_ms(client, case.repeat),
         "bare_serialize_ms": cpu_ms(lambda: serialize(plain), case.repeat),
         "unpack_client_ms": cpu_ms(lambda: client_unpack(case.frame), case.repeat),
-        "unpack_fast_ms": cpu_ms(lambda: fast.resolve(client_unpack(fast.rewrite(case.frame))), case.repeat),
+        "unpack_fast_ms": cpu_ms(lambda: bridge_unpack(case.frame), case.repeat),
     }
     try:
         same = bridge() == client()
@@ -215,5 +219,4 @@ def measure_case(case: Case, fast: FastFrames) -> dict[str, Any]:
 
 
 def run() -> dict[str, dict[str, Any]]:
-    fast = FastFrames(lambda topic: True, views=True)  # as the bridge's receive loop decodes
-    return {case.name: measure_case(case, fast) for case in cases()}
+    return {case.name: measure_case(case) for case in cases()}

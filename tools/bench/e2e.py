@@ -124,7 +124,8 @@ class Bench:
     def bridge_session(
         self,
         scene_file: str,
-        fast_frames: bool | str = True,
+        runner: str = "node",
+        decode: str = "bridge",
         profile: str | None = None,
         node_args: Sequence[str] = (),
     ) -> Iterator[Session]:
@@ -135,8 +136,10 @@ class Bench:
             node = self.module(
                 "bridge",
                 "tools.bench.node",
-                "--fast-frames",
-                fast_frames if isinstance(fast_frames, str) else ("on" if fast_frames else "off"),
+                "--as",
+                runner,
+                "--decode",
+                decode,
                 "--topicsport",
                 str(topics_port),
                 "--servicesport",
@@ -156,41 +159,6 @@ class Bench:
                 self.procs.stop(node)
             self.procs.stop(server)
             time.sleep(0.5)  # let the master drop the node's registrations
-
-    def client_pose_run(self, scene_file: str, pose: str, camera: str, fast_frames: bool) -> dict[str, Any]:
-        """Pose through the bare client (no bridge, no ROS), idle then under camera load."""
-        server, topics_port, services_port = self._replay_server("ERROR")
-        out = self.workdir / f"client_pose_{int(fast_frames)}.json"
-        probe: Child | None = None
-        try:
-            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
-            probe = self.module(
-                "client_probe",
-                "tools.bench.client_probe",
-                "--topicsport",
-                str(topics_port),
-                "--servicesport",
-                str(services_port),
-                "--simconfigpath",
-                str(self.config_dir),
-                "--scene",
-                scene_file,
-                "--pose",
-                pose,
-                "--camera",
-                camera,
-                "--out",
-                str(out),
-                "--seconds",
-                str(min(self.duration_s, 5.0)),
-                *(["--fast-frames"] if fast_frames else []),
-            )
-            wait_line(probe, "done", FIRST_MESSAGE_TIMEOUT_S)
-            return json.loads(out.read_text())
-        finally:
-            if probe is not None:
-                self.procs.stop(probe)
-            self.procs.stop(server)
 
     # -- baselines
 

@@ -1,16 +1,12 @@
-"""The bridge node as the benchmark runs it: `projectairsim_node` with fast frames (default: views).
+"""The bridge as the benchmark runs it: exactly as users start it.
 
-Modes: `views` (large bin values such as image pixels stay memoryviews of the received frame, so the
-receive thread copies nothing and a frame dropped by its stream is never copied at all), `on` (pixels
-sliced into bytes on the receive thread), `off` (the client's own msgpack path).
+`--as node` (default) runs the shipped node (`airsim_mapper.cli.node.main`); `--as mission` runs a mission
+script as `scripts/hello_ros.py` builds it: the client, then `World`, then the wrapper, which takes over
+the client's receive thread. `--decode client` is a comparison baseline, not a shipped path: every frame
+goes through msgpack, as the bare client decodes it. `--profile OUT.prof` cProfiles every thread.
 
-Until the engine installs fast frames itself, this entry point does what that wiring does: it installs the
-proxy on the client's topics socket right after connecting (heavy = every callback on the topic is one of
-the engine's stream slots) and resolves placeholders in `Stream.offer`. Both steps are idempotent, so this
-also runs unchanged once the engine does it.
-
-    python -m tools.bench.node [--fast-frames on|views|off] [--profile OUT.prof]
-        [--switch-interval-ms MS] <node arguments>
+    python -m tools.bench.node [--as node|mission] [--decode bridge|client] [--profile OUT.prof]
+        <node arguments>
 """
 
 from __future__ import annotations
@@ -18,52 +14,13 @@ from __future__ import annotations
 import contextlib
 import cProfile
 import pstats
+import signal
 import sys
 import threading
-from collections.abc import Callable
 from typing import Any
 
 from airsim_mapper.cli import node
-from airsim_mapper.engine import streams
-from tools.bench import recv_proxy as fast_frames
-
-
-def only_streams(client: Any) -> Callable[[str], bool]:
-    """True for a topic whose callbacks are all engine stream slots (so no mission script sees it)."""
-
-    def heavy(topic: str) -> bool:
-        entry = client.subs.get(topic)
-        callbacks = entry["callbacks"] if entry else ()
-        return bool(callbacks) and all(
-            isinstance(getattr(cb, "__self__", None), streams.Stream) for cb in callbacks
-        )
-
-    return heavy
-
-
-def enable_fast_frames(views: bool = False) -> None:
-    connect = node.connect
-    holder: dict[str, fast_frames.FastFrames] = {}
-
-    def connect_fast(*args: Any, **kwargs: Any) -> Any:
-        client = connect(*args, **kwargs)
-        if client is not None:
-            holder["fast"] = fast_frames.install(client, only_streams(client), views=views)
-        return client
-
-    offer = streams.Stream.offer
-
-    def offer_resolved(self: streams.Stream, topic_info: Any, message: Any) -> None:
-        fast = holder.get("fast")
-        if fast is not None:
-            try:
-                message = fast.resolve(message)
-            except fast_frames.ExpiredFrameError:
-                return
-        offer(self, topic_info, message)
-
-    node.connect = connect_fast
-    streams.Stream.offer = offer_resolved
+from airsim_mapper.engine import sim_link
 
 
 def profile_all_threads() -> list[cProfile.Profile]:
@@ -101,18 +58,39 @@ def _option(args: list[str], name: str, default: str | None) -> str | None:
     return value
 
 
+def mission(argv: list[str]) -> int:
+    """World first, then the wrapper on the same client, until SIGINT/SIGTERM (scripts/hello_ros.py)."""
+    import rospy
+    from projectairsim import ProjectAirSimClient, World
+
+    from airsim_mapper.wrapper import ProjectAirSimWrapper
+
+    args = node.parse_args(argv)
+    rospy.init_node(args.nodename or "bench_mission", disable_signals=True)
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
+    client.connect()
+    world = World(client, args.scene, sim_config_path=args.simconfigpath.rstrip("/") + "/")
+    bridge = ProjectAirSimWrapper(client, sim_config_path=args.simconfigpath, tune_process=True)
+    bridge.update_topics(world)
+    stop.wait()
+    rospy.signal_shutdown("benchmark done")
+    client.disconnect()
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
-    mode = _option(args, "--fast-frames", "views")
+    runner = _option(args, "--as", "node")
+    decode = _option(args, "--decode", "bridge")
     profile_path = _option(args, "--profile", None)
-    switch_ms = _option(args, "--switch-interval-ms", None)
-    if switch_ms is not None:
-        sys.setswitchinterval(float(switch_ms) / 1e3)
+    if decode == "client":
+        sim_link.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
     profiles = profile_all_threads() if profile_path else []
-    if mode in ("on", "views"):
-        enable_fast_frames(views=mode == "views")
     try:
-        return node.main([sys.argv[0], *args])
+        return mission(args) if runner == "mission" else node.main([sys.argv[0], *args])
     finally:
         if profile_path:
             dump_profiles(profiles, profile_path)

@@ -107,32 +107,18 @@ def e2e_table(e2e: dict[str, Any]) -> str:
     add("bridge depth 1080p @30", e2e["bridge"]["depth"], "bridge")
     add("raw rospy PointCloud2 100k @20", base["rospy_cloud"], "publisher")
     add("raw pynng 100k scan @20", base["pynng_cloud"], "receiver")
-    add("bridge lidar 100k @20 (fast frames)", e2e["bridge"]["lidar"], "bridge")
-    add("bridge lidar 100k @20 (client path)", e2e["bridge"]["lidar_client_path"], "bridge")
+    add("bridge lidar 100k @20", e2e["bridge"]["lidar"], "bridge")
+    add("  (msgpack decoding, as the bare client)", e2e["bridge"]["lidar_client_path"], "bridge")
     add("bridge pose @100, idle", e2e["pose"]["idle"], "bridge")
     add("bridge pose @100, 1080p camera @30", e2e["bridge"]["camera"], "bridge", camera_topics[1])
-    load = e2e["pose"]["camera_load"]
-    names = list(load["topics"])
-    add("bridge pose @100, 1080p camera @60 load", load, "bridge", names[0])
-    add("  (the load: camera 1080p @60)", load, "bridge", names[1])
+    for key, label in (("camera_load", "node"), ("camera_load_mission", "mission script")):
+        load = e2e["pose"].get(key)
+        if load is None:
+            continue
+        names = list(load["topics"])
+        add(f"{label}: pose @100, 1080p camera @60 load", load, "bridge", names[0])
+        add("  (the load: camera 1080p @60)", load, "bridge", names[1])
     text = _table(header, rows)
-    client_rows = []
-    for label, result in e2e.get("client_pose", {}).items():
-        for key in ("pose_idle", "pose_load", "camera_load"):
-            r = result[key]
-            client_rows.append(
-                [
-                    f"{label}: {key.replace('_', ' ')}",
-                    f"{r['rate_hz']:.1f}",
-                    _ms(r.get("latency_p50_ms")),
-                    _ms(r.get("latency_p99_ms")),
-                ]
-            )
-    if client_rows:
-        text += "\n\n" + _table(
-            ["bare client, one Pair0 connection, 1080p camera @60 as load", "rate Hz", "p50 ms", "p99 ms"],
-            client_rows,
-        )
     scale_rows = []
     for drones, result in e2e["scale"].items():
         topics = result["topics"]
@@ -240,10 +226,10 @@ def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
             )
         )
     pose_idle = topic(e2e["pose"]["idle"])
-    for label, result in (
-        ("30 Hz (nominal)", bridge["camera"]),
-        ("60 Hz (saturating)", e2e["pose"]["camera_load"]),
-    ):
+    loads = [("30 Hz (nominal)", bridge["camera"]), ("60 Hz (saturating)", e2e["pose"]["camera_load"])]
+    if "camera_load_mission" in e2e["pose"]:
+        loads.append(("60 Hz (saturating), mission script", e2e["pose"]["camera_load_mission"]))
+    for label, result in loads:
         pose = topic(result, next(k for k in result["topics"] if k.endswith("actual_pose")))
         out.append(
             _target(

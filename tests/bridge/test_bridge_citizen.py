@@ -1,0 +1,202 @@
+"""A good ROS citizen (issue #19): the node started without a scene, then a scene loaded over ROS, once per
+request whatever the publisher latches."""
+
+from __future__ import annotations
+
+import time
+
+from bridgeharness import wait_topic
+from harness import Child, wait_until
+
+SENSORS, TWO = "scene_drone_sensors.jsonc", "scene_two_drones.jsonc"
+
+
+def subscribed(topic: str) -> bool:
+    import rosgraph
+
+    _pubs, subs, _srvs = rosgraph.Master("/probe").getSystemState()
+    return any(name == topic for name, _nodes in subs)
+
+
+def loads(node: Child, scene_file: str) -> int:
+    """How many times the node loaded `scene_file` (its log line per load)."""
+    return node.output().count(f"({scene_file}) loaded")
+
+
+def rostopic_pub(rig, topic: str, scene_file: str, *flags: str) -> Child:
+    return rig.launcher.start(
+        "rostopic_pub", ["rostopic", "pub", *flags, topic, "std_msgs/String", f"data: '{scene_file}'"]
+    )
+
+
+def test_start_without_a_scene_then_load_one_once_per_request(rig_factory):
+    rig = rig_factory()
+    node = rig.start_node(node_name="waiting_bridge")
+    topic = "/ProjectAirSim/node/waiting_bridge/load_scene"
+    waiting = f"no --scene: waiting for a scene file name on {topic}"
+    wait_until(lambda: node.check_alive() is None and waiting in node.output(), 60, what="the node to wait")
+    assert subscribed(topic)
+
+    # The documented flow with `rostopic pub -1` (latched, stays 3 s, leaves): one load.
+    rostopic_pub(rig, topic, SENSORS, "-1")
+    wait_topic("/airsim_node/Drone1/DownCamera/scene_camera/image", node)
+    time.sleep(5)
+    assert loads(node, SENSORS) == 1
+    assert subscribed(topic)
+
+    # A plain `rostopic pub` latches its message and stays: 10 s of it, still one load.
+    publisher = rostopic_pub(rig, topic, TWO)
+    wait_topic("/airsim_node/Drone2/actual_pose", node)
+    time.sleep(10)
+    assert loads(node, TWO) == 1
+    publisher.stop()
+
+    # The same scene name published again on purpose is a new request: it reloads.
+    rostopic_pub(rig, topic, TWO, "-1")
+    wait_until(lambda: loads(node, TWO) == 2, 30, what="the deliberate second load")
+    time.sleep(4)
+    assert loads(node, TWO) == 2
+    assert node.alive()
+    node.stop()
+
+
+def lookup(parent: str, child: str, timeout: float = 20.0):
+    import rospy
+    import tf2_ros
+
+    buffer = tf2_ros.Buffer()
+    listener = tf2_ros.TransformListener(buffer)
+    try:
+        return buffer.lookup_transform(parent, child, rospy.Time(0), rospy.Duration(timeout))
+    finally:
+        listener.unregister()
+
+
+def test_rosrun_from_home_in_ros_namespace_with_private_params(rig_factory, tmp_path):
+    """rosrun from a directory without sim_config/, under ROS_NAMESPACE, configured by `_param:=` only."""
+    rig = rig_factory()
+    ports = rig.sim.ports
+    node = rig.launcher.start(
+        "rosrun_ns",
+        [
+            "rosrun",
+            "projectairsim_ros",
+            "projectairsim_node.py",
+            "__name:=ns_bridge",
+            f"_topicsport:={ports.topics}",
+            f"_servicesport:={ports.services}",
+            "_scene:=scene_drone_sensors.jsonc",
+            "_mapping:=enu",
+        ],
+        env={"ROS_NAMESPACE": "sim1"},
+        cwd=tmp_path,
+    )
+    wait_topic("/sim1/airsim_node/Drone1/actual_pose", node)
+    out = node.output()
+    assert "setting scene = 'scene_drone_sensors.jsonc' (parameter ~scene)" in out
+    assert "setting mapping = 'enu' (parameter ~mapping)" in out
+    assert "setting simconfigpath = " in out and "does not exist here, so the package's own" in out
+    assert subscribed("/sim1/ProjectAirSim/node/ns_bridge/load_scene")
+    lookup("sim1/map", "sim1/Drone1/base_link")  # the ENU mapping's frames, prefixed
+    node.stop()
+
+
+def test_ns_remap_and_command_line_over_parameter(rig_factory):
+    """`__ns:=` plus a relative --namespace nests; --scene on the command line wins over `_scene:=`."""
+    rig = rig_factory()
+    node = rig.start_node(
+        "__ns:=fleet",
+        "--namespace",
+        "sim2",
+        "--scene",
+        TWO,
+        "_scene:=scene_drone_sensors.jsonc",
+        node_name="nested_bridge",
+    )
+    wait_topic("/fleet/sim2/airsim_node/Drone2/actual_pose", node)
+    assert "setting scene = 'scene_two_drones.jsonc' (command line)" in node.output()
+    assert "setting namespace = 'sim2' (command line)" in node.output()
+    lookup("fleet/sim2/map", "fleet/sim2/airsim_node/Drone2")
+    node.stop()
+
+
+LAUNCH = """<launch>
+  <group ns="fleet">
+    <include file="$(find projectairsim_ros)/launch/projectairsim.launch">
+      <arg name="nodename" value="group_bridge"/>
+      <arg name="topicsport" value="{topics}"/>
+      <arg name="servicesport" value="{services}"/>
+    </include>
+  </group>
+</launch>
+"""
+
+
+def test_roslaunch_group_ns_with_defaults_then_load_a_scene(rig_factory, tmp_path):
+    """The shipped launch file in <group ns>, its defaults (no scene): load_scene under the group, then a
+    scene loaded on it brings the robots' topics up under the group."""
+    rig = rig_factory()
+    launch = tmp_path / "fleet.launch"
+    launch.write_text(LAUNCH.format(topics=rig.sim.ports.topics, services=rig.sim.ports.services))
+    roslaunch = rig.launcher.start("roslaunch_group", ["roslaunch", str(launch)])
+    topic = "/fleet/ProjectAirSim/node/group_bridge/load_scene"
+    wait_until(lambda: roslaunch.check_alive() is None and subscribed(topic), 90, what=topic)
+    rostopic_pub(rig, topic, SENSORS, "-1")
+    wait_topic("/fleet/airsim_node/Drone1/DownCamera/scene_camera/image", roslaunch)
+    assert "setting scene = '' (parameter ~scene)" in roslaunch.output()
+    lookup("fleet/map", "fleet/airsim_node/Drone1")
+    rig.launcher.stop_all()
+
+
+def goal(x: float, y: float, z: float, frame: str, yaw: float = 0.0):
+    import math
+
+    from geometry_msgs.msg import PoseStamped
+
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = x, y, z
+    msg.pose.orientation.w, msg.pose.orientation.z = math.cos(yaw / 2), math.sin(yaw / 2)
+    return msg
+
+
+def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame(rig_factory):
+    import math
+
+    import numpy as np
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+
+    rig = rig_factory()
+    ns = "/sim1/airsim_node/Drone1"
+    node = rig.start_node(
+        "--namespace", "sim1", "--scene", SENSORS, node_name="goal_bridge", wait_for=f"{ns}/actual_pose"
+    )
+    latest: list = []
+    sub = rospy.Subscriber(f"{ns}/actual_pose", PoseStamped, lambda m: latest.append(m.pose))
+    pub = rospy.Publisher(f"{ns}/desired_pose", PoseStamped, queue_size=1)
+    try:
+        wait_until(lambda: pub.get_num_connections() > 0, 20, what="the desired_pose link")
+
+        def at(x: float, y: float, z: float) -> bool:
+            p = latest[-1].position if latest else None
+            return p is not None and np.allclose([p.x, p.y, p.z], [x, y, z], atol=0.05)
+
+        # In the bridge's own namespaced world frame (was refused before).
+        pub.publish(goal(0.0, 0.0, -5.0, "sim1/map", yaw=math.pi / 2))
+        wait_until(lambda: at(0.0, 0.0, -5.0), 15, what="the goal in sim1/map")
+        time.sleep(0.5)  # let tf catch up with the teleport
+        # "1 m ahead" in the robot's own frame: facing east (yaw 90 deg in NED), so 1 m east.
+        pub.publish(goal(1.0, 0.0, 0.0, "sim1/airsim_node/Drone1"))
+        wait_until(lambda: at(0.0, 1.0, -5.0), 15, what="the body-frame goal")
+        q = latest[-1].orientation
+        assert math.isclose(2 * math.atan2(q.z, q.w), math.pi / 2, abs_tol=0.02)  # still facing east
+        # A frame tf does not know: refused with a warning naming it, nothing sent.
+        pub.publish(goal(9.0, 9.0, -9.0, "nowhere_frame"))
+        wait_until(lambda: "'nowhere_frame'" in node.output(), 15, what="the refusal")
+        time.sleep(1.0)
+        assert at(0.0, 1.0, -5.0)
+    finally:
+        sub.unregister()
+        pub.unregister()
+    node.stop()

@@ -1,0 +1,139 @@
+"""The engine on fake links: scene loads, a simulator reconnect and a stalled simulator, in-process in
+seconds (no simulator, no ROS master)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from fakes import FakeRos, FakeSim, fake_client
+from harness import SIM_CONFIG, wait_until
+
+from airsim_mapper.engine.engine import Engine
+from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, status_topic
+from airsim_mapper.mapping.loader import load_mapping
+
+SCENE = "scene_drone_sensors.jsonc"
+IMU_ROS = "/airsim_node/Drone1/IMU1/imu"
+IMU_SIM = "/Sim/SceneDroneSensors/robots/Drone1/sensors/IMU1/imu_kinematics"
+
+
+class Rig:
+    """An engine whose every simulator link and world load is recorded."""
+
+    def __init__(self, reconnect: bool = True) -> None:
+        self.links: list[FakeSim] = []
+        self.worlds: list[str] = []
+        self.ros = FakeRos()
+        self.engine = Engine(
+            fake_client(),
+            load_mapping("default"),
+            SIM_CONFIG,
+            "node",
+            load_world=self._load_world,
+            client_factory=fake_client if reconnect else None,
+            ros=self.ros,
+            link=self._link,
+        )
+
+    def _link(self, client, counts) -> FakeSim:
+        self.links.append(FakeSim(client, counts))
+        return self.links[-1]
+
+    def _load_world(self, client, scene, _path) -> str:
+        self.worlds.append(scene.file)
+        return f"world of {scene.file}"
+
+    def statuses(self) -> list[dict]:
+        return [json.loads(m.data) for m in self.ros.publishers[status_topic("node")].messages]
+
+
+@pytest.fixture
+def rig():
+    made = Rig()
+    yield made
+    made.engine.shutdown(timeout=2.0)
+
+
+def test_a_scene_load_builds_its_bridges_and_a_second_replaces_them(rig: Rig):
+    scene = rig.engine.load_scene(SCENE)
+    assert scene.name == "SceneDroneSensors" and rig.worlds == [SCENE]
+    names = set(rig.engine.bridges)
+    assert "imu[Drone1/IMU1]" in names and IMU_ROS in rig.ros.publishers
+    imu_publisher = rig.ros.publishers[IMU_ROS]
+    basic = rig.engine.load_scene("scene_basic_drone.jsonc")
+    assert rig.worlds == [SCENE, "scene_basic_drone.jsonc"] and rig.engine.scene is basic
+    assert set(rig.engine.bridges) == {spec.name for spec in rig.engine.specs_for(basic)}
+    assert imu_publisher.unregistered  # the old scene's bridges are gone, whatever the new one has
+
+
+def test_a_refused_scene_keeps_the_current_one(rig: Rig):
+    rig.engine.load_scene(SCENE)
+    before = dict(rig.engine.bridges)
+    with pytest.raises(Exception, match="no_such_scene"):
+        rig.engine.load_scene("no_such_scene.jsonc")
+    assert rig.engine.bridges == before and rig.worlds == [SCENE]
+
+
+def test_a_dropped_connection_reconnects_reloads_and_moves_the_streams_over(rig: Rig):
+    rig.engine.load_scene(SCENE)
+    rig.ros.publishers[IMU_ROS].subscribers(1)
+    first = rig.links[0]
+    assert IMU_SIM in first.subscriptions
+    first.dropped = True
+    wait_until(lambda: rig.engine.counters["reconnects"] == 1, 10, what="the reconnect")
+    assert first.closed and len(rig.links) == 2 and rig.worlds == [SCENE, SCENE]
+    second = rig.links[1]
+    assert IMU_SIM in second.subscriptions  # the lazy stream, moved to the new link
+    assert (
+        second.deliver(
+            IMU_SIM,
+            {
+                "time_stamp": 1,
+                "orientation": {"w": 1.0, "x": 0, "y": 0, "z": 0},
+                "angular_velocity": {"x": 0, "y": 0, "z": 0},
+                "linear_acceleration": {"x": 0, "y": 0, "z": 0},
+            },
+        )
+        == 1
+    )
+    wait_until(lambda: rig.ros.publishers[IMU_ROS].messages, 5, what="an IMU message after the reconnect")
+    wait_until(lambda: rig.statuses()[-1]["state"] == CONNECTED, 5, what="the connected status")
+    assert rig.engine.counters["sim_losses"] == 1
+
+
+def test_a_silent_simulator_is_stale_then_answers_again_without_a_reload(rig: Rig):
+    rig.engine.load_scene(SCENE)
+    rig.links[0].answering = False
+    wait_until(lambda: rig.engine.state == STALE, 10, what="the stall")
+    assert rig.engine.reason.startswith("unresponsive")
+    rig.links[0].answering = True
+    wait_until(lambda: rig.engine.state == CONNECTED, 10, what="the simulator answering again")
+    assert len(rig.links) == 1 and rig.worlds == [SCENE] and rig.engine.counters["reconnects"] == 0
+
+
+def test_shutdown_stops_every_bridge_and_says_so():
+    rig = Rig(reconnect=False)
+    rig.engine.load_scene(SCENE)
+    publishers = list(rig.ros.publishers.values())
+    assert rig.engine.shutdown(timeout=2.0)
+    assert rig.engine.bridges == {} and rig.links[0].closed
+    assert all(p.unregistered for p in publishers)
+    assert rig.statuses()[-1]["state"] == STOPPED
+
+
+def test_a_scene_read_and_expanded_at_start_up_is_loaded_without_reading_or_expanding_again(rig, monkeypatch):
+    from airsim_mapper.engine import engine as engine_module
+    from airsim_mapper.mapping.expand import expand
+    from airsim_mapper.scene import read_scene
+
+    scene = read_scene(SIM_CONFIG, SCENE)
+    specs = expand(rig.engine.mapping, scene, "node", "")
+
+    def again(*_args, **_kwargs):
+        raise AssertionError("read or expanded again")
+
+    monkeypatch.setattr(engine_module, "read_scene", again)
+    monkeypatch.setattr(engine_module, "expand", again)
+    assert rig.engine.load_scene(scene, specs) is scene
+    assert set(rig.engine.bridges) == {spec.name for spec in specs}

@@ -1,0 +1,156 @@
+"""The runners against fake links: what each catalogue runner sends, its after-hooks, lazy attach and
+detach as ROS subscribers come and go, and the command watchdog. No simulator, no ROS master."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+from fakes import FakeRos, FakeSim
+from geometry_msgs.msg import PoseStamped, Twist
+from harness import SIM_CONFIG, wait_until
+from std_msgs.msg import String
+from std_srvs.srv import TriggerRequest
+
+from airsim_mapper.convert.pose import camera_pose_key
+from airsim_mapper.engine.bridges import RosService, RosToSim, Services, SimToRos, StreamingImage, build
+from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.mapping.expand import expand
+from airsim_mapper.mapping.loader import load_mapping
+from airsim_mapper.scene import read_scene
+
+IMU = {
+    "time_stamp": 5_000_000_000,
+    "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+    "angular_velocity": {"x": 0.1, "y": 0.0, "z": 0.0},
+    "linear_acceleration": {"x": 0.0, "y": 0.0, "z": -9.8},
+}
+
+
+@pytest.fixture(scope="module")
+def specs():
+    scene = read_scene(str(SIM_CONFIG), "scene_drone_sensors.jsonc")
+    return {spec.name: spec for spec in expand(load_mapping("default"), scene, "node", "")}
+
+
+def spec_of(specs, prefix: str):
+    return next(spec for name, spec in specs.items() if name.startswith(prefix))
+
+
+@pytest.fixture
+def sim() -> FakeSim:
+    return FakeSim()
+
+
+@pytest.fixture
+def ros() -> FakeRos:
+    return FakeRos()
+
+
+@pytest.fixture
+def services(sim: FakeSim, ros: FakeRos) -> Services:
+    actions: list[tuple[str, dict]] = []
+    found = Services(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda a, p: actions.append((a, p)))
+    found.actions = actions  # type: ignore[attr-defined]
+    return found
+
+
+def test_the_catalogue_picks_each_runner(specs, services):
+    kinds = {name.split("[")[0]: type(build(spec, services)) for name, spec in specs.items()}
+    assert kinds["actual_pose"] is SimToRos
+    assert kinds["streaming_image"] is StreamingImage
+    assert kinds["cmd_vel"] is RosToSim and kinds["load_scene"] is RosToSim
+    assert kinds["switch_view"] is RosService and kinds["takeoff_all"] is RosService
+
+
+def test_a_lazy_bridge_subscribes_to_the_simulator_only_while_ros_listens(specs, services, sim, ros):
+    spec = spec_of(specs, "imu[Drone1/IMU1]")
+    bridge = build(spec, services)
+    bridge.start()
+    publisher = ros.publishers[spec.ros]
+    assert spec.options.lazy and spec.sim not in sim.subscriptions
+    publisher.subscribers(1)
+    assert spec.sim in sim.subscriptions
+    assert sim.deliver(spec.sim, IMU) == 1
+    wait_until(lambda: len(publisher.messages) == 1, 5, what="the converted IMU message")
+    imu = publisher.messages[0]
+    assert imu.header.frame_id == spec.frame_id and imu.linear_acceleration.z == pytest.approx(-9.8)
+    publisher.subscribers(0)
+    assert spec.sim not in sim.subscriptions
+    assert sim.deliver(spec.sim, IMU) == 0
+    publisher.subscribers(2)  # back again: subscribed anew
+    assert spec.sim in sim.subscriptions
+    bridge.stop()
+    assert spec.sim not in sim.subscriptions and publisher.unregistered
+    publisher.subscribers(1)  # a late peer callback after the stop attaches nothing
+    assert spec.sim not in sim.subscriptions
+
+
+def test_cmd_vel_drives_the_robot_and_the_watchdog_stops_it_when_commands_stop(specs, services, sim, ros):
+    spec = spec_of(specs, "cmd_vel[Drone1]")
+    bridge = build(spec, services)
+    bridge.start()
+    twist = Twist()
+    twist.linear.x = 1.0
+    ros.subscribers[spec.ros].handler(twist)
+    assert [method for method, _ in sim.calls] == [spec.sim]
+    timeout = spec.options.watchdog_s
+    assert timeout is not None
+    bridge.check_watchdog(time.monotonic())  # commands are still fresh
+    assert len(sim.calls) == 1
+    bridge.check_watchdog(time.monotonic() + timeout + 0.1)
+    stop_method = spec.params.get("stop_method", "Hover")
+    assert sim.calls[-1] == (f"{spec.sim.rsplit('/', 1)[0]}/{stop_method}", {})
+    bridge.check_watchdog(time.monotonic() + 2 * timeout + 0.2)  # stopped once, not again
+    assert len(sim.calls) == 2
+
+
+def test_a_refused_command_is_counted_and_nothing_is_sent(specs, services, sim, ros):
+    spec = spec_of(specs, "cmd_vel[Drone1]")
+    bridge = build(spec, services)
+    bridge.start()
+    twist = Twist()
+    twist.linear.x = float("nan")
+    ros.subscribers[spec.ros].handler(twist)
+    assert sim.calls == [] and bridge.stats.errors == 1
+
+
+def test_switch_view_calls_the_simulator_then_every_streaming_image_follows(specs, services, sim, ros):
+    stream_spec = spec_of(specs, "streaming_image[")
+    streams = [build(stream_spec, services), build(stream_spec, services)]
+    for stream in streams:
+        stream.cameras = [{"sim": "/Sim/a"}, {"sim": "/Sim/b"}]  # two streaming cameras
+        stream.topic = "/Sim/a"
+        stream.start()
+    spec = spec_of(specs, "switch_view[")
+    service = build(spec, services)
+    service.start()
+    handler = ros.services[spec.ros].handler
+    assert handler(TriggerRequest()).success and sim.calls == [(spec.sim, {})]
+    assert [s.topic for s in streams] == ["/Sim/b", "/Sim/b"]
+    sim.result = False  # the simulator refused: the streaming images stay on their cameras
+    assert not handler(TriggerRequest()).success
+    assert [s.topic for s in streams] == ["/Sim/b", "/Sim/b"]
+    streams[0].stop()
+    sim.result = True
+    handler(TriggerRequest())
+    assert [s.topic for s in streams] == ["/Sim/b", "/Sim/a"]  # a stopped stream no longer follows
+
+
+def test_a_camera_pose_command_is_remembered_once_the_simulator_took_it(specs, services, sim, ros):
+    spec = spec_of(specs, "camera_desired_pose[Drone1/DownCamera")
+    build(spec, services).start()
+    goal = PoseStamped()
+    goal.pose.orientation.w = 1.0
+    goal.pose.position.x = 2.0
+    ros.subscribers[spec.ros].handler(goal)
+    assert [method for method, _ in sim.calls] == [spec.sim]
+    assert camera_pose_key("Drone1", "DownCamera") in services.shared
+
+
+def test_load_scene_asks_the_engine_for_its_action(specs, services, sim, ros):
+    spec = spec_of(specs, "load_scene[")
+    build(spec, services).start()
+    ros.subscribers[spec.ros].handler(String(data=" scene_basic_drone.jsonc "))
+    assert services.actions == [("load_scene", {"scene": "scene_basic_drone.jsonc"})]
+    assert sim.calls == [] and sim.published == []

@@ -1,0 +1,183 @@
+"""Fake links for engine unit tests: a simulator link and a ROS link that record what the runners do.
+
+They implement the interfaces the runners and the engine use (engine/sim_link.SimLink and
+engine/ros_link.RosLink), so the engine runs in-process without a simulator or a ROS master.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import threading
+import types
+from dataclasses import dataclass, field
+from typing import Any
+
+import genpy
+
+from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, message_class
+
+
+def fake_client() -> Any:
+    """What the engine touches of a projectairsim client when the link is fake."""
+    return types.SimpleNamespace(socket_topics=None, socket_services=None, subs={}, topics={}, state=True)
+
+
+@dataclass
+class FakeSim:
+    """The simulator link: every call answers `result`; topics are delivered by `deliver`."""
+
+    client: Any = None
+    counts: Any = None  # the engine's FrameCounts
+    result: Any = True
+    answering: bool = True  # probes are answered
+    dropped: bool = False  # the connection dropped
+    dead: bool = False
+    bad_frames: int = 0
+    fast_frames: int = 0
+    calls: list[tuple[str, dict]] = field(default_factory=list)
+    published: list[tuple[str, dict]] = field(default_factory=list)
+    subscriptions: dict[str, list] = field(default_factory=dict)
+    closed: bool = False
+
+    def __post_init__(self) -> None:
+        self.lock = threading.Lock()
+
+    def ensure_receiver(self) -> bool:
+        return False
+
+    def connected(self) -> bool:
+        return not self.dead and not self.dropped
+
+    def probe(self, timeout: float) -> bool:
+        return self.answering
+
+    def mark_dead(self) -> None:
+        self.dead = True
+
+    def abandon(self) -> None:
+        self.dead = self.closed = True
+
+    def subscribe(self, topic: str, callback: Any) -> None:
+        with self.lock:
+            self.subscriptions.setdefault(topic, []).append(callback)
+
+    def unsubscribe(self, topic: str, callback: Any) -> None:
+        with self.lock:
+            callbacks = [cb for cb in self.subscriptions.get(topic, []) if cb != callback]
+            if callbacks:
+                self.subscriptions[topic] = callbacks
+            else:
+                self.subscriptions.pop(topic, None)
+
+    def forget_all(self) -> None:
+        with self.lock:
+            self.subscriptions.clear()
+
+    def deliver(self, topic: str, message: Any) -> int:
+        """Hand a message to every callback on `topic`, as the receive loop would; how many got it."""
+        with self.lock:
+            callbacks = list(self.subscriptions.get(topic, []))
+        for callback in callbacks:
+            callback(types.SimpleNamespace(path=topic), message)
+        return len(callbacks)
+
+    def publish(self, topic: str, message: dict) -> None:
+        self.published.append((topic, message))
+
+    def call(self, method: str, params: dict, timeout: float = 30.0) -> Any:
+        self.calls.append((method, params))
+        return self.result
+
+    def call_async(self, method: str, params: dict) -> concurrent.futures.Future:
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        future.set_result(self.call(method, params))
+        return future
+
+    def begin_close(self) -> None:
+        pass
+
+    def close(self, timeout: float = 10.0, client_topics: bool = False) -> bool:
+        self.closed = True
+        return True
+
+    def stop_loop(self) -> None:
+        pass
+
+
+@dataclass
+class FakePublisher:
+    name: str
+    ros_type: str
+    latch: bool
+    on_peers: Any
+    messages: list = field(default_factory=list)
+    connections: int = 0
+    unregistered: bool = False
+
+    def publish(self, message: Any) -> None:
+        if self.unregistered:
+            raise ClosedEndpoint(f"publish() to an unregistered publisher {self.name}")
+        self.messages.append(message)
+
+    def get_num_connections(self) -> int:
+        return self.connections
+
+    def unregister(self) -> None:
+        self.unregistered = True
+
+    def subscribers(self, count: int) -> None:
+        """`count` subscribers are connected now (the peer listener fires, as rospy's would)."""
+        self.connections = count
+        if self.on_peers is not None:
+            self.on_peers()
+
+
+@dataclass
+class FakeEndpoint:
+    name: str
+    handler: Any
+    closed: bool = False
+
+    def unregister(self) -> None:
+        self.closed = True
+
+    def shutdown(self) -> None:
+        self.closed = True
+
+
+@dataclass
+class FakeRos:
+    """The ROS link: publishers, subscribers and services by name, and every transform sent."""
+
+    publishers: dict[str, FakePublisher] = field(default_factory=dict)
+    subscribers: dict[str, FakeEndpoint] = field(default_factory=dict)
+    services: dict[str, FakeEndpoint] = field(default_factory=dict)
+    transforms: list = field(default_factory=list)
+    closed: bool = False
+
+    def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
+        message_class(ros_type)  # the type must exist, as rospy would require
+        self.publishers[name] = FakePublisher(name, ros_type, latch, on_peers)
+        return self.publishers[name]
+
+    def subscriber(self, name: str, ros_type: str, callback: Any, *, queue_size: int) -> FakeEndpoint:
+        message_class(ros_type)
+        self.subscribers[name] = FakeEndpoint(name, callback)
+        return self.subscribers[name]
+
+    def service(self, name: str, srv_type: str, handler: Any) -> tuple[FakeEndpoint, type]:
+        self.services[name] = FakeEndpoint(name, handler)
+        return self.services[name], message_class(srv_type, "srv")._response_class
+
+    def now(self) -> genpy.Time:
+        return genpy.Time(100, 0)
+
+    def send_tf(self, transforms: list) -> None:
+        self.transforms.extend(transforms)
+
+    def transform_pose(self, pose_stamped: Any, target: str) -> Any:
+        """tf knows no frames here."""
+        raise FrameUnknown(pose_stamped.header.frame_id, target, "the fake ROS link has no tf")
+
+    def close(self) -> None:
+        self.closed = True
