@@ -155,6 +155,7 @@ def resolve(
 def _overlay(
     base: dict[str, Any], base_origins: Origins, child: dict[str, Any], origins: Origins
 ) -> tuple[dict[str, Any], Origins]:
+    """`child` merged onto its resolved `base` (see the module's docstring), with the merged marks."""
     table = Table(origins.file)
     table.copy(origins, (), ())  # the child's own marks (top level, version, ...)
     merged: dict[str, Any] = {}
