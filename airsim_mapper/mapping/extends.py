@@ -98,10 +98,11 @@ def _parsed(text: str, file: str, limits: YamlLimits | None) -> tuple[dict[str, 
     return data, Origins.of(marks, file)
 
 
-def _frame_problems(data: dict[str, Any], origins: Origins) -> list[Problem]:
-    """Wrong types of the keys that steer the merge (the schema checks everything else afterwards)."""
+def _frame_problems(data: dict[str, Any], origins: Origins, extending: bool = True) -> list[Problem]:
+    """Wrong types of the keys that steer the merge, in an extending file or (not `extending`) in a base
+    (the schema checks everything else afterwards)."""
     problems = []
-    if not isinstance(data.get("extends"), str) or not data["extends"].strip():
+    if extending and (not isinstance(data.get("extends"), str) or not data["extends"].strip()):
         problems.append(_located(origins, ("extends",), "extends: expected a mapping name or a file path"))
     remove = data.get("remove", [])
     if not isinstance(remove, list) or not all(isinstance(name, str) for name in remove):
@@ -138,12 +139,16 @@ def resolve(
     if problems:
         raise MappingError(problems)
     base, base_origins = _read_base(data["extends"].strip(), origins, chain, limits)
+    problems = _frame_problems(base, base_origins, extending=False)
+    if problems:
+        raise MappingError(problems)
     return _overlay(base, base_origins, data, origins)
 
 
 def _overlay(
     base: dict[str, Any], base_origins: Origins, child: dict[str, Any], origins: Origins
 ) -> tuple[dict[str, Any], Origins]:
+    """`child` merged onto its resolved `base` (see the module's docstring), with the merged marks."""
     table = Table(origins.file)
     table.copy(origins, (), ())  # the child's own marks (top level, version, ...)
     merged: dict[str, Any] = {}

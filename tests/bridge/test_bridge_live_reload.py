@@ -91,6 +91,24 @@ def mapping_statuses() -> list:
     return seen
 
 
+def node_status() -> list[dict]:
+    """The `mapping` field of each message on the node's status topic, collected from now on."""
+    import json
+
+    import rospy
+    from std_msgs.msg import String
+
+    from airsim_mapper.engine.status import status_topic
+
+    seen: list[dict] = []
+
+    def on(message) -> None:
+        seen.append(json.loads(message.data).get("mapping", {"state": None}))
+
+    on.subscriber = rospy.Subscriber(status_topic(NODE), String, on, queue_size=10)
+    return seen
+
+
 def atomic_write(path: Path, text: str) -> None:
     """Write as editors do: a new file renamed over the old one."""
     temporary = path.with_suffix(".tmp")
@@ -127,12 +145,16 @@ def test_an_edit_is_applied_live_and_an_invalid_edit_changes_nothing(rig: Stack,
     assert NEW_IMAGE in published_topics()
 
     diagnostics = mapping_statuses()
+    reports = node_status()
     log_before = len(rig.node.output())
     atomic_write(mapping_file, INVALID)
     located = f"{mapping_file}:8:28: {INVALID_ERROR}"
     wait_until(lambda: located in rig.node.output()[log_before:], 5, what="the rejection in the node's log")
     wait_until(
         lambda: any(s.level == 2 and located in s.message for s in diagnostics[1:]), 5, what="/diagnostics"
+    )
+    wait_until(
+        lambda: any(r["state"] == "rejected" and located in r["errors"] for r in reports), 5, what="status"
     )
     after_rejection = time.monotonic()
     wait_until(lambda: len(new_images.after(after_rejection)) >= 2, 5, what="images after the rejection")

@@ -126,3 +126,10 @@ def test_stamp_changes_with_content_and_is_none_for_a_missing_file(tmp_path):
     path.write_text("ab")
     os.utime(path, ns=(1, 1))
     assert stamp(str(path)) != first
+
+
+def test_the_node_watches_unless_told_not_to():
+    from airsim_mapper.cli.node import parse_args
+
+    assert parse_args([]).no_watch is False
+    assert parse_args(["--no-watch"]).no_watch is True

@@ -28,7 +28,7 @@ def default_bridges() -> dict:
 
 
 def test_the_document_has_its_examples():
-    assert set(EXAMPLES) == {"frames", "select", "rename", "one_camera", "no_chase_depth"}
+    assert set(EXAMPLES) == {"frames", "select", "rename", "one_camera", "no_chase_depth", "readme"}
 
 
 @pytest.mark.parametrize("name", sorted(EXAMPLES))
@@ -73,3 +73,11 @@ def test_select_keeps_the_selected_elements():
     infos = {b.name for b in got.values() if b.rule == "camera_info"}
     assert infos and not any("depth_" in name or "Chase" in name for name in infos)
     assert not any(b.rule == "lidar" for b in got.values())
+
+
+def test_the_readme_example_does_all_three():
+    got = bridges("readme")
+    assert got["actual_pose[Drone1]"].ros == "/drones/Drone1/pose"
+    images = [b for b in got.values() if b.rule == "camera_image"]
+    assert len(images) == 8 and all(b.options.rate_limit_hz == 5.0 for b in images)
+    assert not any(b.rule == "lidar" for b in got.values())  # the sensors scene has no Scout*

@@ -260,6 +260,14 @@ def test_remove_without_extends_and_wrong_types_of_the_merge_keys_are_errors(tmp
     ]
 
 
+def test_a_base_whose_rules_or_defaults_have_the_wrong_shape_is_an_error_in_the_base(tmp_path):
+    base = write(tmp_path, "base.yaml", "version: 1\ndefaults: [1]\nrules: {a: 1}\n")
+    assert errors(write(tmp_path, "i.yaml", "version: 1\nextends: base.yaml\n")) == [
+        f"{base}:3:8: rules: expected array",
+        f"{base}:2:11: defaults: expected object",
+    ]
+
+
 def test_a_rule_overridden_twice_in_one_file_is_an_error(base, tmp_path):
     lines = errors(
         write(tmp_path, "h.yaml", "version: 1\nextends: base.yaml\nrules: [{name: imu}, {name: imu}]\n")
