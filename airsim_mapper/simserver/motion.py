@@ -381,3 +381,81 @@ class Body:
 def body_to_world_velocity(orientation: np.ndarray, vx: float, vy: float, vz: float) -> np.ndarray:
     """Velocity given in the yaw-rotated body frame (forward, right, down) in world NED."""
     return rotate(quat_from_rpy(0.0, 0.0, yaw_of(orientation)), np.array([vx, vy, vz], dtype=float))
+
+
+class Heading(Command):
+    """MoveByHeading: turn to `heading`, then fly along it at `speed` (and `vz`) for `duration` s.
+
+    The duration counts from the moment the yaw is within `margin` of the heading, as the real
+    controller's countdown does; `yaw_rate` <= 0 turns as fast as the body can (MAX_YAW_RATE).
+    """
+
+    name = "MoveByHeading"
+
+    def __init__(
+        self,
+        heading: float,
+        speed: float,
+        vz: float,
+        duration: float,
+        margin: float,
+        yaw_rate: float,
+        timeout_s: float = math.inf,
+    ) -> None:
+        super().__init__(timeout_s)
+        self.heading = wrap_angle(heading)
+        self.speed = speed
+        self.vz = vz
+        self.flight = max(0.0, duration)
+        self.margin = max(abs(margin), 1e-4)
+        self.max_rate = abs(yaw_rate) if yaw_rate > 0 else MAX_YAW_RATE
+        self.flown: float | None = None  # seconds flown along the heading, once aligned
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        yaw = yaw_of(state.orientation)
+        rate = turn_rate(yaw, self.heading, self.max_rate, dt)
+        if self.flown is None:
+            if abs(wrap_angle(self.heading - yaw)) > self.margin:
+                return Motion(np.zeros(3), rate)
+            self.flown = 0.0
+        if self.flown >= self.flight:
+            return None
+        self.flown += dt
+        velocity = np.array(
+            [self.speed * math.cos(self.heading), self.speed * math.sin(self.heading), self.vz]
+        )
+        return Motion(velocity, rate)
+
+
+# A kinematic bicycle for SetRoverControls (no tyre model; constants of a small ground robot)
+ROVER_MAX_SPEED = 5.0  # m/s at engine 1
+ROVER_ACCELERATION = 2.0  # m/s^2 towards the engine's speed
+ROVER_BRAKE_DECELERATION = 8.0  # m/s^2 at brake 1
+ROVER_WHEELBASE_M = 0.5
+ROVER_MAX_STEERING = 0.6  # rad
+
+
+class Drive(Command):
+    """SetRoverControls: engine (-1..1) sets a target speed, brake (0..1) slows, steering (rad) turns.
+
+    It never completes by itself: it runs until the next command replaces it (its reply is sent at once).
+    """
+
+    name = "SetRoverControls"
+
+    def __init__(self, engine: float, steering: float, brake: float, speed: float = 0.0) -> None:
+        super().__init__()
+        self.engine = float(np.clip(engine, -1.0, 1.0))
+        self.steering = float(np.clip(steering, -ROVER_MAX_STEERING, ROVER_MAX_STEERING))
+        self.brake = float(np.clip(brake, 0.0, 1.0))
+        self.speed = speed
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        target = self.engine * ROVER_MAX_SPEED
+        step = ROVER_ACCELERATION * dt
+        self.speed += float(np.clip(target - self.speed, -step, step))
+        brake = self.brake * ROVER_BRAKE_DECELERATION * dt
+        self.speed = math.copysign(max(0.0, abs(self.speed) - brake), self.speed)
+        yaw = yaw_of(state.orientation)
+        velocity = np.array([self.speed * math.cos(yaw), self.speed * math.sin(yaw), 0.0])
+        return Motion(velocity, self.speed * math.tan(self.steering) / ROVER_WHEELBASE_M)
