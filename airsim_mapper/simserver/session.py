@@ -16,6 +16,7 @@ from airsim_mapper.simserver.scene import EARTH_RADIUS_M, SceneSpec, topic_table
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.streams import Render
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo
+from airsim_mapper.simserver.visual_noops import VisualSettings
 from airsim_mapper.simserver.world import World
 
 GEO_KEYS = ("latitudes", "longitudes", "altitudes")
@@ -93,6 +94,7 @@ class Session:
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
         self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories)
+        self.visuals = VisualSettings()
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns
 
@@ -164,6 +166,7 @@ class Session:
                 self.env_actors.set_link_rate,
             ),
         ]
+        table += self.visuals.methods(p)
         for robot in self.robots.values():
             table += robot.methods()
         return table

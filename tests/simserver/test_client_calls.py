@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import copy
 import math
+import time
 
 import pytest
 from projectairsim import Drone, EnvActor, World
@@ -248,3 +249,23 @@ def test_an_unknown_asynchronous_call_is_answered_at_once_with_the_real_error(sh
         assert again.request(hash_request) == "airsim-mapper-simserver"
     finally:
         again.disconnect()
+
+
+def test_visual_and_debug_calls_are_accepted_as_logged_no_ops(shared_simserver, drone_world):
+    world, drone = drone_world
+    world.plot_debug_points([[0.0, 0.0, -1.0]], [1.0, 0.0, 0.0, 1.0], 5.0, 1.0, False)
+    world.flush_persistent_markers()
+    world.set_trace_line([1.0, 0.0, 0.0, 1.0], 2.0)
+    assert world.set_weather_visual_effects_param(1, 0.5) is True
+    assert world.get_weather_visual_effects_param() == {1: 0.5}
+    world.set_time_of_day(True, "2024-06-01 18:30:00", False, 1.0, 1.0, True)
+    assert world.get_time_of_day() == "2024-06-01 18:30:00"
+    assert world.set_sunlight_intensity(3.0) is True and world.get_sunlight_intensity() == 3.0
+    assert world.set_wind_velocity(1.0, 2.0, 0.0) is True
+    assert world.get_wind_velocity() == (1.0, 2.0, 0.0)
+    assert drone.get_landed_state() in (0, 1)  # the scene is still served
+    deadline = time.monotonic() + 5.0
+    while "debugPlotPoints ignored" not in shared_simserver.process.output() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    log = shared_simserver.process.output()
+    assert "debugPlotPoints ignored" in log and "SetWindVelocity ignored" in log
