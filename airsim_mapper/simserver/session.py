@@ -90,7 +90,7 @@ class Session:
     def __init__(self, spec: SceneSpec, world: World, hub: TopicHub, render: Render | None = None) -> None:
         self.spec = spec
         self.hub = hub
-        self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start)
+        self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start, lock_step=True)
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
         self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories)
@@ -201,6 +201,7 @@ class Session:
             robot.start()
 
     def stop(self) -> None:
+        self.clock.cancel_stepping()
         for robot in self.robots.values():
             robot.stop()
 
