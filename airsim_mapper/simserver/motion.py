@@ -16,9 +16,19 @@ import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy, quat_multiply, quat_normalize, rotate, yaw_of
 
+# Takeoff and landing follow Project AirSim's multirotor API (vehicle_apis/multirotor_api):
+# Takeoff refuses (false) while moving faster than approx_zero_vel_ and otherwise runs
+# MoveToPosition(x, y, z + GetTakeoffZ(), 0.5 m/s) from where the robot is (multirotor_api_base.cpp
+# Takeoff); GetTakeoffZ() is -3 m ("3 meters is probably safe enough to get out of the backwash").
 TAKEOFF_HEIGHT_M = 3.0
-TAKEOFF_SPEED = 3.0
-LAND_SPEED = 2.5
+TAKEOFF_SPEED = 0.5
+APPROX_ZERO_VEL = 0.05  # approx_zero_vel_, multirotor_api_base.hpp
+# Land descends at landing_vel_ = 0.2 m/s (multirotor_api_base.hpp); it first waits up to 10 s for the
+# descent to start (so a robot already on the ground replies after 10 s more), then confirms touchdown
+# after kSecNearZeroVelRequired = 1 s of near-zero vertical speed (multirotor_api_base.cpp Land).
+LAND_SPEED = 0.2
+LAND_START_WAIT_S = 10.0
+LAND_CONFIRM_S = 1.0
 VERTICAL_GAIN = 5.0
 MAX_VERTICAL_SPEED = 5.0
 MAX_YAW_RATE = math.pi
@@ -188,16 +198,28 @@ class Path(Command):
 
 
 class Land(Command):
-    """Descend at LAND_SPEED until the ground; completes on touchdown."""
+    """Descend at LAND_SPEED to the surface below, then confirm touchdown for LAND_CONFIRM_S."""
 
     name = "Land"
 
+    def __init__(self, timeout_s: float = math.inf) -> None:
+        super().__init__(timeout_s)
+        self.descended = False
+        self.resting = 0.0  # seconds at rest on the ground so far
+
     def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
         height = ground_z - state.position[2]
-        if height <= 1e-3:
+        if height > 1e-3:
+            self.descended = True
+            self.resting = 0.0
+            speed = min(LAND_SPEED, height / dt) if dt > 0 else LAND_SPEED
+            return Motion(np.array([0.0, 0.0, speed]))
+        if not self.descended and self.elapsed < LAND_START_WAIT_S:
+            return Motion(np.zeros(3))  # waiting for a descent that cannot start: already down
+        if self.resting >= LAND_CONFIRM_S:
             return None
-        speed = min(LAND_SPEED, height / dt) if dt > 0 else LAND_SPEED
-        return Motion(np.array([0.0, 0.0, speed]))
+        self.resting += dt
+        return Motion(np.zeros(3))
 
 
 class Rotate(Command):

@@ -26,6 +26,7 @@ from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import (
+    APPROX_ZERO_VEL,
     FORWARD_ONLY,
     TAKEOFF_HEIGHT_M,
     TAKEOFF_SPEED,
@@ -465,9 +466,11 @@ class RobotRuntime:
         return set_flag
 
     def _takeoff(self, params: dict[str, Any]) -> bool:
+        """Climb TAKEOFF_HEIGHT_M from where the robot is; false while it moves (the real controller's)."""
         kin = self.body.snapshot()
-        target_z = min(kin.position[2], self.ground_z(kin.position) - TAKEOFF_HEIGHT_M)
-        target = np.array([kin.position[0], kin.position[1], target_z])
+        if float(np.linalg.norm(kin.linear_velocity)) > APPROX_ZERO_VEL:
+            return False
+        target = np.array([kin.position[0], kin.position[1], kin.position[2] - TAKEOFF_HEIGHT_M])
         return self._run(Path([target], TAKEOFF_SPEED, YawMode(True, 0.0), _timeout(params)))
 
     def _go_home(self, params: dict[str, Any]) -> bool:

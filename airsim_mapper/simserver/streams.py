@@ -305,7 +305,8 @@ class InstrumentStream:
         self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
         self.start_ns = start_ns
         rate = float(sensor.config.get("update-frequency", 100.0) or 100.0)
-        self.schedule = Schedule(int(1e9 / rate))
+        # the real battery publishes on every physics update (battery.cpp Update); the others at their rate
+        self.schedule = Schedule(1 if sensor.type == "battery" else int(1e9 / rate))
         self.idle = Schedule(IDLE_REFRESH_NS)
         self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 

@@ -269,3 +269,28 @@ def test_visual_and_debug_calls_are_accepted_as_logged_no_ops(shared_simserver, 
         time.sleep(0.1)
     log = shared_simserver.process.output()
     assert "debugPlotPoints ignored" in log and "SetWindVelocity ignored" in log
+
+
+def test_takeoff_and_land_take_the_real_controllers_time(drone_world):
+    """Takeoff climbs 3 m at 0.5 m/s from where it is; Land descends at 0.2 m/s and confirms for 1 s."""
+    world, drone = drone_world
+    teleport(drone, 0.0, 0.0, -4.0)
+    world.pause()
+
+    async def timed(start_command) -> tuple[bool, float]:
+        start = world.get_sim_time()
+        task = await start_command()
+        while not task.done():
+            world.continue_for_sim_time(100_000_000, wait_until_complete=True)
+            await asyncio.sleep(0.02)
+        return await task, (world.get_sim_time() - start) / 1e9
+
+    ok, up_s = asyncio.run(timed(drone.takeoff_async))
+    assert ok is True and position(drone)[2] == pytest.approx(-7.0, abs=0.01)  # from 4 m, not to 3 m
+    assert up_s == pytest.approx(6.0, abs=0.15)
+    teleport(drone, 0.0, 0.0, -2.02)  # 2 m above the landing pad
+    ok, down_s = asyncio.run(timed(drone.land_async))
+    assert ok is True and position(drone)[2] == pytest.approx(-0.02, abs=0.01)
+    assert down_s == pytest.approx(2.0 / 0.2 + 1.0, abs=0.15)
+    assert drone.get_landed_state() == 0
+    world.resume()

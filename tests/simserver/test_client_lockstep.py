@@ -44,12 +44,17 @@ def test_paused_stepping_never_loses_a_camera_image_or_lidar_scan(client):
     start = world.get_sim_time()
     camera = Watch(subscribe(client, f"{sensors}/Chase/scene_camera"), CAMERA_PERIOD_NS, start)
     lidar = Watch(subscribe(client, f"{sensors}/lidar1/lidar"), LIDAR_PERIOD_NS, start)
+    battery = subscribe(client, f"{sensors}/Battery/battery")
     now = start
     for _ in range(200):
         now = world.continue_for_single_step(wait_until_complete=True)
         camera.after_step(now)
         lidar.after_step(now)
     assert now == start + 200 * STEP_NS
+    # the battery publishes once per physics step, as the real sensor does
+    steps = {start + k * STEP_NS for k in range(1, 201)}
+    battery.wait_for(where=lambda m: m["time_stamp"] == now)
+    assert steps <= {m["time_stamp"] for m in battery.messages}
     for n_steps in (2, 5, 7, 17, 33) * 4:
         before = now
         now = world.continue_for_n_steps(n_steps, wait_until_complete=True)
