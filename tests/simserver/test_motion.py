@@ -93,8 +93,19 @@ def test_the_body_never_sinks_below_the_ground_and_lands_there():
     assert body.state.position[2] == pytest.approx(0.0)
     land = body_at(z=-2.0)
     command = land.run(Land())
-    run(land, 1.5)
+    run(land, 10.9)  # 2 m at LAND_SPEED (0.2 m/s), then LAND_CONFIRM_S (1 s) at rest
+    assert command.result is None and land.state.position[2] == pytest.approx(0.0)
+    run(land, 0.2)
     assert command.result is True and land.landed()
+
+
+def test_landing_on_the_ground_already_waits_for_a_descent_then_confirms():
+    body = body_at(z=0.0)
+    command = body.run(Land())
+    run(body, 10.9)
+    assert command.result is None
+    run(body, 0.2)
+    assert command.result is True
 
 
 def test_yaw_rate_and_absolute_yaw_turn_the_body():
