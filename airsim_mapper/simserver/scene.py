@@ -55,6 +55,7 @@ class CaptureSetting:
     capture_enabled: bool
     streaming_enabled: bool
     max_depth_m: float = DEFAULT_MAX_DEPTH_VIS  # depth vis: metres that map to white (max-depth-meters)
+    compress: bool = True  # PNG for the non-depth types (the real server's default is true)
 
 
 @dataclass(frozen=True)
@@ -225,6 +226,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
                 bool(item.get("capture-enabled", False)),
                 bool(item.get("streaming-enabled", False)),
                 max_depth,
+                bool(item.get("compress", True)),
             )
         )
     return tuple(captures)

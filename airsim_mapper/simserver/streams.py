@@ -50,6 +50,16 @@ def mount_pose(
     return compose(kin.position, body_q, offset_position, offset_orientation)
 
 
+def png_bytes(bgr: bytes, width: int, height: int) -> bytes:
+    """A BGR buffer as PNG (`"compress": true`; the real server compresses every non-depth type)."""
+    import cv2
+
+    ok, encoded = cv2.imencode(".png", np.frombuffer(bgr, dtype=np.uint8).reshape(height, width, 3))
+    if not ok:
+        raise RuntimeError("PNG encoding failed")
+    return encoded.tobytes()
+
+
 class Schedule:
     """Fires every `period_ns` of sim time (the first time at once)."""
 
@@ -152,9 +162,10 @@ class CameraStream:
             max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
             rendered = self.render(position, orientation, width, height, fov, types, max_depth)
             for image_type, img in rendered.items():
-                message = messages.image(
-                    now_ns, img.encoding, img.width, img.height, img.data, position, orientation
-                )
+                encoding, data = img.encoding, img.data
+                if self.captures[image_type].compress and encoding == "BGR":
+                    encoding, data = "PNG", png_bytes(data, img.width, img.height)
+                message = messages.image(now_ns, encoding, img.width, img.height, data, position, orientation)
                 latest[image_type] = message
                 path = self.topic(image_type)
                 if self.hub.is_subscribed(path):

@@ -294,3 +294,30 @@ def test_takeoff_and_land_take_the_real_controllers_time(drone_world):
     assert down_s == pytest.approx(2.0 / 0.2 + 1.0, abs=0.15)
     assert drone.get_landed_state() == 0
     world.resume()
+
+
+def test_compress_true_sends_png_for_colour_types_and_raw_depth(client):
+    import cv2
+    import numpy as np
+    from projectairsim.utils import unpack_image
+
+    config = copy.deepcopy(scene_config("scene_drone_sensors.jsonc"))
+    down = next(s for s in config["actors"][0]["robot-config"]["sensors"] if s["id"] == "DownCamera")
+    for setting in down["capture-settings"]:
+        setting.pop("compress")  # the real server's default is true
+    world = loaded(client, config)
+    drone = Drone(client, world, "Drone1")
+    world.pause()
+    inbox = subscribe(client, drone.sensors["DownCamera"]["scene_camera"])
+    world.continue_for_sim_time(200_000_000, wait_until_complete=True)
+    published = inbox.wait_for()[-1]
+    assert published["encoding"] == "PNG"
+    decoded = cv2.imdecode(np.frombuffer(published["data"], dtype=np.uint8), cv2.IMREAD_COLOR)
+    images = drone.get_images("DownCamera", [0, 1, 3])
+    assert images[0]["encoding"] == "PNG" and images[3]["encoding"] == "PNG"
+    assert images[1]["encoding"] == "16FC1"  # depth is never compressed
+    scene = unpack_image(images[0])
+    assert scene.shape == decoded.shape == (240, 320, 3)
+    assert np.array_equal(scene, decoded)  # lossless, the same paused frame
+    assert unpack_image(images[1]).shape == (240, 320)
+    world.resume()
