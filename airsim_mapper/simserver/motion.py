@@ -263,6 +263,7 @@ class Body:
         self.armed = False
         self.active: Command | None = None
         self.updated_ns = 0
+        self.wind = np.zeros(3)  # world NED m/s: an idle airborne body drifts with it
 
     # -- commands
 
@@ -350,7 +351,12 @@ class Body:
         with self.lock:
             state = self.state
             command = self.active
-            if command is None and self._at_rest():
+            drifting = (
+                command is None
+                and bool(np.any(self.wind))
+                and self.ground(state.position) - state.position[2] > LANDED_HEIGHT_M
+            )
+            if command is None and not drifting and self._at_rest():
                 return  # nothing moves: skip the world queries (an idle server stays cheap)
             if command is not None and command.start_ns is not None and now_ns is not None:
                 dt = min(dt, (now_ns - command.start_ns) / 1e9)
@@ -371,7 +377,9 @@ class Body:
                     if motion is None:
                         self.active = None
                         command.finish(True)
-            velocity = motion.velocity if motion is not None else np.zeros(3)
+            velocity = (
+                motion.velocity if motion is not None else self.wind.copy() if drifting else np.zeros(3)
+            )
             yaw_rate = motion.yaw_rate if motion is not None else 0.0
             new_position = state.position + velocity * step
             if np.any(new_position != state.position):

@@ -94,7 +94,7 @@ class Session:
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
         self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories)
-        self.visuals = VisualSettings()
+        self.visuals = VisualSettings(self._set_wind)
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns
 
@@ -170,6 +170,11 @@ class Session:
         for robot in self.robots.values():
             table += robot.methods()
         return table
+
+    def _set_wind(self, wind: list[float]) -> None:
+        for robot in self.robots.values():
+            with robot.body.lock:
+                robot.body.wind = np.array(wind, dtype=float)
 
     def step(self, params: dict[str, Any]) -> dict[str, Any]:
         """The 1.1.0 `Step(dt_ns)`: advance the steppable clock and return each robot's state and events.

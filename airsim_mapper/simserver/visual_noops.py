@@ -3,17 +3,20 @@
 Debug plotting, trace lines, weather, time of day, sun, clouds and lights have nothing to act on in the
 headless world. Each is accepted with the reply the real server gives on success (true, or the value last
 set for the getters) and a warning in the server log, once per method and scene, naming what was ignored,
-so that the rest of a script runs. Wind is stored and read back by GetWindVelocity; it does not move robots.
+so that the rest of a script runs. Wind is read back by GetWindVelocity and acts on the kinematics as a
+velocity disturbance: an airborne robot with no command running drifts with it (a running command's
+controller holds its course, as a position controller would).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 from collections.abc import Callable
 from typing import Any
 
-from airsim_mapper.simserver.services import Method
+from airsim_mapper.simserver.services import Method, ServiceError
 
 LOG = logging.getLogger("airsim_mapper.simserver")
 
@@ -54,12 +57,14 @@ IGNORED: dict[str, tuple[str, ...]] = {
     "SetLightObjectRadius": ("object_name", "new_radius"),
 }
 DEFAULT_TIME_OF_DAY = "2021-01-01 12:00:00"
+MAX_WIND_MPS = 200.0
 
 
 class VisualSettings:
     """The values the visual setters last stored, so that their getters answer consistently."""
 
-    def __init__(self) -> None:
+    def __init__(self, on_wind: Callable[[list[float]], None] | None = None) -> None:
+        self._on_wind = on_wind
         self._lock = threading.Lock()
         self._warned: set[str] = set()
         self.weather: dict[str, float] = {}
@@ -101,8 +106,15 @@ class VisualSettings:
         return True
 
     def _set_wind(self, params: dict[str, Any]) -> bool:
-        self._warn("SetWindVelocity", "aerodynamics for wind to act on (it is stored for GetWindVelocity)")
-        self.wind = [float(params[k]) for k in ("v_x", "v_y", "v_z")]
+        self._warn("SetWindVelocity", "aerodynamics: wind only makes idle airborne robots drift")
+        wind = [float(params[k]) for k in ("v_x", "v_y", "v_z")]
+        if not all(math.isfinite(v) and abs(v) <= MAX_WIND_MPS for v in wind):
+            raise ServiceError(
+                f"Wind velocity must be finite and within {MAX_WIND_MPS:g} m/s, got {wind}", 2.0
+            )
+        self.wind = wind
+        if self._on_wind is not None:
+            self._on_wind(wind)
         return True
 
     def methods(self, prefix: str) -> list[Method]:

@@ -261,8 +261,14 @@ def test_visual_and_debug_calls_are_accepted_as_logged_no_ops(shared_simserver, 
     world.set_time_of_day(True, "2024-06-01 18:30:00", False, 1.0, 1.0, True)
     assert world.get_time_of_day() == "2024-06-01 18:30:00"
     assert world.set_sunlight_intensity(3.0) is True and world.get_sunlight_intensity() == 3.0
+    teleport(drone, 0.0, 0.0, -10.0)
+    world.pause()
     assert world.set_wind_velocity(1.0, 2.0, 0.0) is True
     assert world.get_wind_velocity() == (1.0, 2.0, 0.0)
+    world.continue_for_sim_time(1_000_000_000, wait_until_complete=True)
+    assert position(drone) == pytest.approx([1.0, 2.0, -10.0], abs=0.01)  # an idle drone drifts
+    world.set_wind_velocity(0.0, 0.0, 0.0)
+    world.resume()
     assert drone.get_landed_state() in (0, 1)  # the scene is still served
     deadline = time.monotonic() + 5.0
     while "debugPlotPoints ignored" not in shared_simserver.process.output() and time.monotonic() < deadline:
