@@ -16,9 +16,19 @@ import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy, quat_multiply, quat_normalize, rotate, yaw_of
 
+# Takeoff and landing follow Project AirSim's multirotor API (vehicle_apis/multirotor_api):
+# Takeoff refuses (false) while moving faster than approx_zero_vel_ and otherwise runs
+# MoveToPosition(x, y, z + GetTakeoffZ(), 0.5 m/s) from where the robot is (multirotor_api_base.cpp
+# Takeoff); GetTakeoffZ() is -3 m ("3 meters is probably safe enough to get out of the backwash").
 TAKEOFF_HEIGHT_M = 3.0
-TAKEOFF_SPEED = 3.0
-LAND_SPEED = 2.5
+TAKEOFF_SPEED = 0.5
+APPROX_ZERO_VEL = 0.05  # approx_zero_vel_, multirotor_api_base.hpp
+# Land descends at landing_vel_ = 0.2 m/s (multirotor_api_base.hpp); it first waits up to 10 s for the
+# descent to start (so a robot already on the ground replies after 10 s more), then confirms touchdown
+# after kSecNearZeroVelRequired = 1 s of near-zero vertical speed (multirotor_api_base.cpp Land).
+LAND_SPEED = 0.2
+LAND_START_WAIT_S = 10.0
+LAND_CONFIRM_S = 1.0
 VERTICAL_GAIN = 5.0
 MAX_VERTICAL_SPEED = 5.0
 MAX_YAW_RATE = math.pi
@@ -188,16 +198,28 @@ class Path(Command):
 
 
 class Land(Command):
-    """Descend at LAND_SPEED until the ground; completes on touchdown."""
+    """Descend at LAND_SPEED to the surface below, then confirm touchdown for LAND_CONFIRM_S."""
 
     name = "Land"
 
+    def __init__(self, timeout_s: float = math.inf) -> None:
+        super().__init__(timeout_s)
+        self.descended = False
+        self.resting = 0.0  # seconds at rest on the ground so far
+
     def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
         height = ground_z - state.position[2]
-        if height <= 1e-3:
+        if height > 1e-3:
+            self.descended = True
+            self.resting = 0.0
+            speed = min(LAND_SPEED, height / dt) if dt > 0 else LAND_SPEED
+            return Motion(np.array([0.0, 0.0, speed]))
+        if not self.descended and self.elapsed < LAND_START_WAIT_S:
+            return Motion(np.zeros(3))  # waiting for a descent that cannot start: already down
+        if self.resting >= LAND_CONFIRM_S:
             return None
-        speed = min(LAND_SPEED, height / dt) if dt > 0 else LAND_SPEED
-        return Motion(np.array([0.0, 0.0, speed]))
+        self.resting += dt
+        return Motion(np.zeros(3))
 
 
 class Rotate(Command):
@@ -241,6 +263,7 @@ class Body:
         self.armed = False
         self.active: Command | None = None
         self.updated_ns = 0
+        self.wind = np.zeros(3)  # world NED m/s: an idle airborne body drifts with it
 
     # -- commands
 
@@ -328,7 +351,12 @@ class Body:
         with self.lock:
             state = self.state
             command = self.active
-            if command is None and self._at_rest():
+            drifting = (
+                command is None
+                and bool(np.any(self.wind))
+                and self.ground(state.position) - state.position[2] > LANDED_HEIGHT_M
+            )
+            if command is None and not drifting and self._at_rest():
                 return  # nothing moves: skip the world queries (an idle server stays cheap)
             if command is not None and command.start_ns is not None and now_ns is not None:
                 dt = min(dt, (now_ns - command.start_ns) / 1e9)
@@ -349,7 +377,9 @@ class Body:
                     if motion is None:
                         self.active = None
                         command.finish(True)
-            velocity = motion.velocity if motion is not None else np.zeros(3)
+            velocity = (
+                motion.velocity if motion is not None else self.wind.copy() if drifting else np.zeros(3)
+            )
             yaw_rate = motion.yaw_rate if motion is not None else 0.0
             new_position = state.position + velocity * step
             if np.any(new_position != state.position):
@@ -381,3 +411,81 @@ class Body:
 def body_to_world_velocity(orientation: np.ndarray, vx: float, vy: float, vz: float) -> np.ndarray:
     """Velocity given in the yaw-rotated body frame (forward, right, down) in world NED."""
     return rotate(quat_from_rpy(0.0, 0.0, yaw_of(orientation)), np.array([vx, vy, vz], dtype=float))
+
+
+class Heading(Command):
+    """MoveByHeading: turn to `heading`, then fly along it at `speed` (and `vz`) for `duration` s.
+
+    The duration counts from the moment the yaw is within `margin` of the heading, as the real
+    controller's countdown does; `yaw_rate` <= 0 turns as fast as the body can (MAX_YAW_RATE).
+    """
+
+    name = "MoveByHeading"
+
+    def __init__(
+        self,
+        heading: float,
+        speed: float,
+        vz: float,
+        duration: float,
+        margin: float,
+        yaw_rate: float,
+        timeout_s: float = math.inf,
+    ) -> None:
+        super().__init__(timeout_s)
+        self.heading = wrap_angle(heading)
+        self.speed = speed
+        self.vz = vz
+        self.flight = max(0.0, duration)
+        self.margin = max(abs(margin), 1e-4)
+        self.max_rate = abs(yaw_rate) if yaw_rate > 0 else MAX_YAW_RATE
+        self.flown: float | None = None  # seconds flown along the heading, once aligned
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        yaw = yaw_of(state.orientation)
+        rate = turn_rate(yaw, self.heading, self.max_rate, dt)
+        if self.flown is None:
+            if abs(wrap_angle(self.heading - yaw)) > self.margin:
+                return Motion(np.zeros(3), rate)
+            self.flown = 0.0
+        if self.flown >= self.flight:
+            return None
+        self.flown += dt
+        velocity = np.array(
+            [self.speed * math.cos(self.heading), self.speed * math.sin(self.heading), self.vz]
+        )
+        return Motion(velocity, rate)
+
+
+# A kinematic bicycle for SetRoverControls (no tyre model; constants of a small ground robot)
+ROVER_MAX_SPEED = 5.0  # m/s at engine 1
+ROVER_ACCELERATION = 2.0  # m/s^2 towards the engine's speed
+ROVER_BRAKE_DECELERATION = 8.0  # m/s^2 at brake 1
+ROVER_WHEELBASE_M = 0.5
+ROVER_MAX_STEERING = 0.6  # rad
+
+
+class Drive(Command):
+    """SetRoverControls: engine (-1..1) sets a target speed, brake (0..1) slows, steering (rad) turns.
+
+    It never completes by itself: it runs until the next command replaces it (its reply is sent at once).
+    """
+
+    name = "SetRoverControls"
+
+    def __init__(self, engine: float, steering: float, brake: float, speed: float = 0.0) -> None:
+        super().__init__()
+        self.engine = float(np.clip(engine, -1.0, 1.0))
+        self.steering = float(np.clip(steering, -ROVER_MAX_STEERING, ROVER_MAX_STEERING))
+        self.brake = float(np.clip(brake, 0.0, 1.0))
+        self.speed = speed
+
+    def motion(self, state: Kinematic, dt: float, ground_z: float) -> Motion | None:
+        target = self.engine * ROVER_MAX_SPEED
+        step = ROVER_ACCELERATION * dt
+        self.speed += float(np.clip(target - self.speed, -step, step))
+        brake = self.brake * ROVER_BRAKE_DECELERATION * dt
+        self.speed = math.copysign(max(0.0, abs(self.speed) - brake), self.speed)
+        yaw = yaw_of(state.orientation)
+        velocity = np.array([self.speed * math.cos(yaw), self.speed * math.sin(yaw), 0.0])
+        return Motion(velocity, self.speed * math.tan(self.steering) / ROVER_WHEELBASE_M)

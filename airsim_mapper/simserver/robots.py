@@ -14,19 +14,26 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import threading
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from airsim_mapper.geometry import quat_from_rpy, quat_multiply
+from airsim_mapper.simserver import camera as camera_model
 from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import (
+    APPROX_ZERO_VEL,
+    FORWARD_ONLY,
     TAKEOFF_HEIGHT_M,
     TAKEOFF_SPEED,
     Body,
     Command,
+    Drive,
+    Heading,
     Hold,
     Land,
     Path,
@@ -55,8 +62,11 @@ YAW_RATE_LIMIT = 1e4  # rad/s
 POSITION_LIMIT_M = 1e8  # |x|, |y|, |z| of any position, commanded or reached
 COLLISION_RADIUS_M = 0.4
 COLLISION_REPEAT_NS = 100_000_000
+MAX_EVENTS = 1000  # collisions kept for the next Step call
 GROUND_PROBE_M = 0.1  # ground rays start this far above the body, so a body resting on a surface sees it
 MOVE_PARAMS = ("duration", "drivetrain", "yaw_is_rate", "yaw")
+HEADING_PARAMS = ("heading", "speed", "duration", "heading_margin", "yaw_rate", "timeout_sec")
+ROVER_PATH_PARAMS = ("velocity", "timeout_sec", "yaw_rate_max", "lookahead", "adaptive_lookahead")
 PATH_PARAMS = (
     "velocity",
     "timeout_sec",
@@ -137,6 +147,9 @@ class RobotRuntime:
         self.collision_path = f"{self.prefix}/collision_info"
         self.last_collision_ns: int | None = None
         self.in_contact: str | None = None
+        self._events: list[dict[str, Any]] = []  # collisions since the last Step call
+        self._events_lock = threading.Lock()
+        self.parameters: dict[int, float] = {}
         start_ns = clock.now_ns()
         self.cameras: dict[str, CameraStream] = {}
         self.heavy: list[LidarStream | RadarStream] = []
@@ -177,11 +190,20 @@ class RobotRuntime:
             or self.last_collision_ns is None
             or now - self.last_collision_ns >= COLLISION_REPEAT_NS
         ):
-            self.hub.publish(self.collision_path, messages.collision_info(now, contact))
+            message = messages.collision_info(now, contact)
+            self.hub.publish(self.collision_path, message)
+            with self._events_lock:
+                self._events.append({"type": "collision", "sim_time_ns": now, **message})
+                del self._events[:-MAX_EVENTS]
             self.last_collision_ns = now
         self.in_contact = contact.object_name
         before = self.world.collide_sphere(old, COLLISION_RADIUS_M)
         return before is None or contact.penetration_depth > before.penetration_depth
+
+    def take_events(self) -> list[dict[str, Any]]:
+        with self._events_lock:
+            events, self._events = self._events, []
+        return events
 
     # -- ticking
 
@@ -233,14 +255,103 @@ class RobotRuntime:
             Method(f"{p}/SetExternalForce", ("ext_force",), lambda _: True),
             Method(f"{p}/GetReadyState", (), self._ready_state),
             Method(f"{p}/CancelLastTask", (), lambda _: self.body.cancel()),
+            Method(f"{p}/SetParameter", ("index", "value"), self._set_parameter),
         ]
         for path, stream in self.getters.items():
             table.append(Method(path, (), self._getter(stream)))
+            if stream.battery is not None:
+                table += self._battery_methods(path.rsplit("/", 1)[0], stream)
         for camera_id, camera in self.cameras.items():
             table += self._camera_methods(self.scene.sensor_prefix(self.spec.name, camera_id), camera)
+        table.append(Method(f"{p}/GetCameraRay", ("camera_id", "image_type", "x", "y"), self._camera_ray))
+        table += self._actuator_methods()
         if self.spec.multirotor:
             table += self._multirotor_methods()
+        if self.spec.rover:
+            table += self._rover_methods()
         return table
+
+    def _set_parameter(self, params: dict[str, Any]) -> bool:
+        """UnrealRobot's SetParameter(index, value): stored; the kinematic body has no such inputs."""
+        self.parameters[int(_float(params, "index"))] = _float(params, "value")
+        return True
+
+    # -- battery, actuators, JSBSim
+
+    def _battery_methods(self, path: str, stream: InstrumentStream) -> list[Method]:
+        battery = stream.battery
+        assert battery is not None
+        now = self.clock.now_ns
+        return [
+            Method(f"{path}/GetBatteryStatus", (), lambda _: battery.message(now())),
+            Method(
+                f"{path}/SetBatteryRemaining",
+                ("desired_battery_remaining",),
+                lambda a: battery.set_remaining(a["desired_battery_remaining"], now()),
+            ),
+            Method(f"{path}/GetBatteryDrainRate", (), lambda _: battery.drain_rate),
+            Method(
+                f"{path}/SetBatteryDrainRate",
+                ("desired_drain_rate",),
+                lambda a: battery.set_drain_rate(a["desired_drain_rate"], now()),
+            ),
+            Method(
+                f"{path}/SetBatteryHealthStatus",
+                ("battery_health_indicator",),
+                lambda a: battery.set_healthy(bool(a["battery_health_indicator"])),
+            ),
+        ]
+
+    def _actuator_methods(self) -> list[Method]:
+        p = self.prefix
+        table = [
+            Method(f"{p}/SetControlSignals", ("control_signal_map",), self._set_control_signals),
+            Method(f"{p}/GetJSBSimProperty", ("_property_name",), self._no_jsbsim),
+            Method(f"{p}/SetJSBSimProperty", ("_property_name", "_value"), self._no_jsbsim),
+        ]
+        for actuator in self.spec.actuator_ids():
+            table.append(Method(f"{p}/actuators/{actuator}/ToggleFault", ("enable",), self._fault(actuator)))
+        return table
+
+    def _set_control_signals(self, params: dict[str, Any]) -> bool:
+        """Manual-controller outputs by actuator id (0..1 drives a rotor); False if an id is unknown."""
+        signals = params["control_signal_map"]
+        if not isinstance(signals, dict):
+            raise _parameter_error("control_signal_map", f"must map actuator ids to numbers, got {signals!r}")
+        values = {str(k): _float(signals, k) for k in signals}
+        known = set(self.spec.actuator_ids())
+        self.rotors.set_signals({k: v for k, v in values.items() if k in known})
+        return set(values) <= known
+
+    def _fault(self, actuator: str) -> Callable[[dict[str, Any]], bool]:
+        def toggle(params: dict[str, Any]) -> bool:
+            self.rotors.set_fault(actuator, bool(params["enable"]))
+            return True
+
+        return toggle
+
+    def _no_jsbsim(self, _: dict[str, Any]) -> Any:
+        raise ServiceError(
+            f"Robot '{self.spec.name}' has no JSBSim model (physics-type '{self.spec.physics_type}'); "
+            "the headless server does not run JSBSim"
+        )
+
+    def _camera_ray(self, params: dict[str, Any]) -> dict[str, Any]:
+        """GetCameraRay: the pose of the ray through pixel (x, y) of a camera's image type (world NED)."""
+        camera_id = str(params["camera_id"])
+        stream = self.cameras.get(camera_id)
+        if stream is None:
+            raise ServiceError(f"Robot '{self.spec.name}' has no enabled camera '{camera_id}'")
+        image_type = int(_float(params, "image_type"))
+        capture = stream.captures.get(image_type)
+        if capture is None:
+            raise ServiceError(f"Camera '{camera_id}' has no capture-enabled image type {image_type}")
+        x, y = _float(params, "x"), _float(params, "y")
+        f = camera_model.focal_length(capture.width, stream.fov[image_type])
+        right, down = (x - capture.width / 2.0) / f, (y - capture.height / 2.0) / f
+        local = quat_from_rpy(0.0, -math.atan2(down, math.hypot(1.0, right)), math.atan2(right, 1.0))
+        position, orientation = stream.world_pose()
+        return messages.pose(position, quat_multiply(orientation, local))
 
     def _getter(self, stream: InstrumentStream) -> Callable[[dict[str, Any]], dict[str, Any]]:
         return lambda _: stream.message(self.clock.now_ns())
@@ -355,9 +466,11 @@ class RobotRuntime:
         return set_flag
 
     def _takeoff(self, params: dict[str, Any]) -> bool:
+        """Climb TAKEOFF_HEIGHT_M from where the robot is; false while it moves (the real controller's)."""
         kin = self.body.snapshot()
-        target_z = min(kin.position[2], self.ground_z(kin.position) - TAKEOFF_HEIGHT_M)
-        target = np.array([kin.position[0], kin.position[1], target_z])
+        if float(np.linalg.norm(kin.linear_velocity)) > APPROX_ZERO_VEL:
+            return False
+        target = np.array([kin.position[0], kin.position[1], kin.position[2] - TAKEOFF_HEIGHT_M])
         return self._run(Path([target], TAKEOFF_SPEED, YawMode(True, 0.0), _timeout(params)))
 
     def _go_home(self, params: dict[str, Any]) -> bool:
@@ -413,6 +526,69 @@ class RobotRuntime:
         rate = _float(params, "yaw_rate", YAW_RATE_LIMIT)
         return self._run(Rotate(None, rate, duration=_float(params, "duration")))
 
+    def _move_by_heading(self, params: dict[str, Any]) -> bool:
+        """Drone (with `vz`) and rover (without) MoveByHeading."""
+        speed = _float(params, "speed", SPEED_LIMIT_MPS)
+        vz = _float(params, "vz", SPEED_LIMIT_MPS) if "vz" in params else 0.0
+        _speed("speed, vz", np.array([speed, 0.0, vz]))
+        duration = _float(params, "duration")
+        kin = self.body.snapshot()
+        _within_world("duration", kin.position + np.array([speed, speed, vz]) * max(duration, 0.0))
+        command = Heading(
+            _float(params, "heading"),
+            speed,
+            vz,
+            duration,
+            _float(params, "heading_margin"),
+            _float(params, "yaw_rate", YAW_RATE_LIMIT),
+            _timeout(params),
+        )
+        return self._run(command)
+
+    # -- rover
+
+    def _rover_controls(self, params: dict[str, Any]) -> bool:
+        """SetRoverControls: replies at once; the drive lasts until the next command."""
+        engine, steering, brake = (_float(params, k) for k in ("engine", "steering_angle", "brake"))
+        with self.body.lock:
+            previous = self.body.active
+        speed = previous.speed if isinstance(previous, Drive) else 0.0
+        self.body.run(Drive(engine, steering, brake, speed), self.clock.now_ns())
+        return True
+
+    def _rover_move_to(self, params: dict[str, Any]) -> bool:
+        z = self.body.snapshot().position[2]
+        target = [_float(params, "x", POSITION_LIMIT_M), _float(params, "y", POSITION_LIMIT_M), z]
+        speed = _float(params, "velocity", SPEED_LIMIT_MPS)
+        return self._run(Path([target], speed, YawMode(False, 0.0, FORWARD_ONLY), _timeout(params)))
+
+    def _rover_move_on_path(self, params: dict[str, Any]) -> bool:
+        path = params["path"]
+        if not isinstance(path, list) or not all(isinstance(p, list) and len(p) in (2, 3) for p in path):
+            raise _parameter_error("path", f"must be a list of [x, y(, z)] points, got {path!r}")
+        z = self.body.snapshot().position[2]
+        try:
+            points = [_within_world("path", np.array([float(p[0]), float(p[1]), z])) for p in path]
+        except (TypeError, ValueError) as exc:
+            raise _parameter_error("path", f"must hold numbers ({exc})") from None
+        speed = _float(params, "velocity", SPEED_LIMIT_MPS)
+        return self._run(Path(points, speed, YawMode(False, 0.0, FORWARD_ONLY), _timeout(params)))
+
+    def _rover_methods(self) -> list[Method]:
+        p = self.prefix
+        return [
+            Method(f"{p}/EnableApiControl", (), self._flag("api_control", True)),
+            Method(f"{p}/DisableApiControl", (), self._flag("api_control", False)),
+            Method(f"{p}/IsApiControlEnabled", (), lambda _: self.body.api_control),
+            Method(f"{p}/Arm", (), self._flag("armed", True)),
+            Method(f"{p}/Disarm", (), self._flag("armed", False)),
+            Method(f"{p}/CanArm", (), lambda _: True),
+            Method(f"{p}/SetRoverControls", ("engine", "steering_angle", "brake"), self._rover_controls),
+            Method(f"{p}/MoveByHeading", HEADING_PARAMS, self._move_by_heading),
+            Method(f"{p}/MoveToPosition", ("x", "y", *ROVER_PATH_PARAMS), self._rover_move_to),
+            Method(f"{p}/MoveOnPath", ("path", *ROVER_PATH_PARAMS), self._rover_move_on_path),
+        ]
+
     def _multirotor_methods(self) -> list[Method]:
         p = self.prefix
         ok = lambda _: True  # noqa: E731 - modes this kinematic model does not distinguish
@@ -440,6 +616,7 @@ class RobotRuntime:
             Method(f"{p}/MoveOnPath", ("path", *PATH_PARAMS), self._move_on_path),
             Method(f"{p}/RotateToYaw", ("yaw", "timeout_sec", "margin", "yaw_rate"), self._rotate_to),
             Method(f"{p}/RotateByYawRate", ("yaw_rate", "duration"), self._rotate_by),
+            Method(f"{p}/MoveByHeading", HEADING_PARAMS, self._move_by_heading),
             Method(f"{p}/RequestControl", (), ok),
             Method(f"{p}/SetMissionMode", (), ok),
             Method(f"{p}/SetVTOLMode", ("vtol_mode",), ok),

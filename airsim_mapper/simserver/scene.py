@@ -20,6 +20,7 @@ import numpy as np
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.camera import DEFAULT_MAX_DEPTH_VIS
+from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
 IMAGE_TYPE_NAMES = SIM_IMAGE_LEAVES
@@ -54,6 +55,7 @@ class CaptureSetting:
     capture_enabled: bool
     streaming_enabled: bool
     max_depth_m: float = DEFAULT_MAX_DEPTH_VIS  # depth vis: metres that map to white (max-depth-meters)
+    compress: bool = True  # PNG for the non-depth types (the real server's default is true)
 
 
 @dataclass(frozen=True)
@@ -79,8 +81,26 @@ class RobotSpec:
     sensors: tuple[SensorSpec, ...]
 
     @property
+    def controller_type(self) -> str | None:
+        controller = self.config.get("controller")
+        return str(controller.get("type", "")) if isinstance(controller, Mapping) else None
+
+    @property
+    def rover(self) -> bool:
+        """A ground robot driven by the simple-drive controller (SetRoverControls, MoveByHeading)."""
+        return self.controller_type == "simple-drive-api"
+
+    @property
     def multirotor(self) -> bool:
-        return isinstance(self.config.get("controller"), Mapping)
+        return self.controller_type is not None and not self.rover
+
+    @property
+    def physics_type(self) -> str:
+        return str(self.config.get("physics-type", "fast-physics"))
+
+    def actuator_ids(self) -> list[str]:
+        actuators = self.config.get("actuators", []) or []
+        return [str(a["name"]) for a in actuators if isinstance(a, Mapping) and "name" in a]
 
 
 @dataclass(frozen=True)
@@ -96,6 +116,7 @@ class SceneSpec:
     robots: tuple[RobotSpec, ...]
     clock: ClockSpec
     home_geo: tuple[float, float, float]
+    env_actors: tuple[EnvActorSpec, ...] = ()
 
     @property
     def prefix(self) -> str:
@@ -205,6 +226,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
                 bool(item.get("capture-enabled", False)),
                 bool(item.get("streaming-enabled", False)),
                 max_depth,
+                bool(item.get("compress", True)),
             )
         )
     return tuple(captures)
@@ -301,7 +323,22 @@ def parse_scene(text: str | bytes) -> SceneSpec:
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise SceneError(f"scene has duplicate robot names: {', '.join(duplicates)}")
-    return SceneSpec(scene_id, tuple(robots), _clock(config.get("clock")), home)
+    env_actors = config.get("environment-actors", []) or []
+    if not isinstance(env_actors, list):
+        raise SceneError("scene 'environment-actors' must be a list")
+    envs = tuple(_env_actor(a, i, home) for i, a in enumerate(env_actors))
+    return SceneSpec(scene_id, tuple(robots), _clock(config.get("clock")), home, envs)
+
+
+def _env_actor(actor: Any, index: int, home: tuple[float, float, float]) -> EnvActorSpec:
+    if not isinstance(actor, Mapping) or actor.get("type") not in ENV_ACTOR_TYPES:
+        raise SceneError(f"environment actor #{index} must be an object of type {', '.join(ENV_ACTOR_TYPES)}")
+    name = _require(actor, "name", f"environment actor #{index}")
+    position, orientation = _origin(actor.get("origin"), f"environment actor '{name}'", home)
+    config = actor.get("env-actor-config", {})
+    links = config.get("links", []) if isinstance(config, Mapping) else []
+    names = tuple(str(link["name"]) for link in links if isinstance(link, Mapping) and "name" in link)
+    return EnvActorSpec(str(name), position, orientation, names)
 
 
 # ---------------------------------------------------------------------------------------------- topics
@@ -348,4 +385,6 @@ def topic_table(scene: SceneSpec) -> list[TopicInfo]:
         ]
         for sensor in robot.sensors:
             rows += sensor_topics(scene.sensor_prefix(robot.name, sensor.id), sensor)
+    for actor in scene.env_actors:
+        rows.append(TopicInfo(f"{scene.prefix}/env_actors/{actor.name}/actual_kinematics", PUBLISHED, "", 0))
     return sorted(rows, key=lambda row: row.path)

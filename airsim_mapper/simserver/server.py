@@ -177,6 +177,11 @@ class SimServer:
         next_tick = time.monotonic()
         next_pose = next_tick
         while not self._stopping.is_set():
+            session = self.session
+            if session is not None and session.clock.stepping():
+                self._lock_step(session)
+                next_tick = time.monotonic()
+                continue
             now = time.monotonic()
             publish_pose = now >= next_pose
             if publish_pose:
@@ -194,6 +199,23 @@ class SimServer:
                 self._stopping.wait(delay)
             else:
                 next_tick = time.monotonic()
+
+    def _lock_step(self, session: Session) -> None:
+        """One step of a lock-step continue: motion, pose and instruments, then every sensor sample due at
+        the step's time (rendered here, before the clock may move on), then the step counts as done."""
+        try:
+            with self._sim_step_lock:
+                if self.session is not session:
+                    return
+                session.clock.begin_step()
+                session.tick(True)
+            with self._sensor_step_lock:
+                if self.session is session:
+                    session.sensor_tick()
+        except Exception:
+            LOG.exception("lock-step tick failed")
+        finally:
+            session.clock.finish_step()
 
     def _sensor_loop(self) -> None:
         while not self._stopping.is_set():

@@ -2,17 +2,25 @@
 
 from __future__ import annotations
 
+import math
 import threading
 from typing import Any
 
+import numpy as np
+
+from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.clock import SimClock
+from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
 from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.scene import SceneSpec, topic_table
+from airsim_mapper.simserver.scene import EARTH_RADIUS_M, SceneSpec, topic_table
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.streams import Render
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo
+from airsim_mapper.simserver.visual_noops import VisualSettings
 from airsim_mapper.simserver.world import World
 
+GEO_KEYS = ("latitudes", "longitudes", "altitudes")
+GEO_ANGLES = ("pose_roll", "pose_pitch", "pose_yaw")
 TRAJECTORY_KEYS = (
     "time",
     "pose_x",
@@ -47,6 +55,34 @@ class TrajectoryStore:
             self._items[name] = {k: [float(v) for v in params[k]] for k in TRAJECTORY_KEYS}
             return True
 
+    def import_geo(self, params: dict[str, Any], home: tuple[float, float, float]) -> bool:
+        """ImportGeoCoordinates / ImportGeoTrajectory: geo points become NED (flat earth at home)."""
+        keys = ("latitudes", "longitudes", "altitudes")
+        try:
+            lat, lon, alt = (np.asarray(params[k], dtype=float).reshape(-1) for k in keys)
+        except (TypeError, ValueError) as exc:
+            raise ServiceError(
+                f"latitudes, longitudes and altitudes must be lists of numbers ({exc})"
+            ) from None
+        if not (lat.size == lon.size == alt.size):
+            raise ServiceError("latitudes, longitudes and altitudes must have equal lengths")
+        north = np.radians(lat - home[0]) * EARTH_RADIUS_M
+        east = np.radians(lon - home[1]) * EARTH_RADIUS_M * math.cos(math.radians(home[0]))
+        zeros = [0.0] * lat.size
+        ned = {
+            "traj_name": params["traj_name"],
+            "pose_x": north.tolist(),
+            "pose_y": east.tolist(),
+            "pose_z": (home[2] - alt).tolist(),
+            **{k: params.get(k, zeros) for k in ("pose_roll", "pose_pitch", "pose_yaw")},
+            **{k: params[k] for k in ("time", "vel_x_lin", "vel_y_lin", "vel_z_lin")},
+        }
+        return self.import_ned(ned)
+
+    def get(self, name: str) -> dict[str, list[float]] | None:
+        with self._lock:
+            return self._items.get(name)
+
 
 class Session:
     """Everything that exists while one scene is loaded."""
@@ -54,9 +90,11 @@ class Session:
     def __init__(self, spec: SceneSpec, world: World, hub: TopicHub, render: Render | None = None) -> None:
         self.spec = spec
         self.hub = hub
-        self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start)
+        self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start, lock_step=True)
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
+        self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories)
+        self.visuals = VisualSettings(self._set_wind)
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns
 
@@ -101,10 +139,65 @@ class Session:
             Method(f"{p}/ListActors", (), lambda _: list(self.robots)),
             Method(f"{p}/ImportNEDTrajectory", ("traj_name", *TRAJECTORY_KEYS), self.trajectories.import_ned),
             Method(f"{p}/SwitchStreamingView", (), lambda _: True),
+            Method(f"{p}/Step", ("dt_ns",), self.step),
+            Method(
+                f"{p}/ImportGeoCoordinates",
+                ("traj_name", "time", *GEO_KEYS, "vel_x_lin", "vel_y_lin", "vel_z_lin"),
+                lambda a: self.trajectories.import_geo(a, self.spec.home_geo),
+            ),
+            Method(
+                f"{p}/ImportGeoTrajectory",
+                ("traj_name", "time", *GEO_KEYS, *GEO_ANGLES, "vel_x_lin", "vel_y_lin", "vel_z_lin"),
+                lambda a: self.trajectories.import_geo(a, self.spec.home_geo),
+            ),
+            Method(
+                f"{p}/SetEnvActorTrajectory",
+                ("env_actor_name", "traj_name", *TRAJECTORY_OFFSETS, "to_loop"),
+                lambda a: self.env_actors.set_trajectory(a, clock.now_ns()),
+            ),
+            Method(
+                f"{p}/SetEnvActorLinkRotAngle",
+                ("env_actor_name", "link_name", "angle_deg"),
+                self.env_actors.set_link_angle,
+            ),
+            Method(
+                f"{p}/SetEnvActorLinkRotRate",
+                ("env_actor_name", "link_name", "rotation_deg_per_sec"),
+                self.env_actors.set_link_rate,
+            ),
         ]
+        table += self.visuals.methods(p)
         for robot in self.robots.values():
             table += robot.methods()
         return table
+
+    def _set_wind(self, wind: list[float]) -> None:
+        for robot in self.robots.values():
+            with robot.body.lock:
+                robot.body.wind = np.array(wind, dtype=float)
+
+    def step(self, params: dict[str, Any]) -> dict[str, Any]:
+        """The 1.1.0 `Step(dt_ns)`: advance the steppable clock and return each robot's state and events.
+
+        Events are the collisions published since the previous Step, oldest first.
+        """
+        dt_ns = params["dt_ns"]
+        if isinstance(dt_ns, bool) or not isinstance(dt_ns, int) or dt_ns < 0:
+            raise ServiceError(f"Parameter 'dt_ns' must be a non-negative integer, got {dt_ns!r}", code=2.0)
+        now = self.clock.continue_for(dt_ns, True, "Step")
+        robots = {}
+        for name, robot in self.robots.items():
+            kin = robot.body.snapshot()
+            robots[name] = {
+                "state": {
+                    "position": messages.vector3(kin.position),
+                    "orientation": messages.quaternion(kin.orientation),
+                    "linear_velocity": messages.vector3(kin.linear_velocity),
+                    "angular_velocity": messages.vector3(kin.angular_velocity),
+                },
+                "events": robot.take_events(),
+            }
+        return {"sim_time_ns": now, "robots": robots}
 
     # -- running
 
@@ -113,6 +206,7 @@ class Session:
             robot.start()
 
     def stop(self) -> None:
+        self.clock.cancel_stepping()
         for robot in self.robots.values():
             robot.stop()
 
@@ -126,6 +220,8 @@ class Session:
             if publish_pose:
                 robot.publish_pose(now)
             robot.step_instruments(now)
+        if publish_pose and self.env_actors.actors:
+            self.env_actors.publish(self.hub, now)
 
     def sensor_tick(self) -> bool:
         """Sensor thread: render and scan what is due; True if anything was produced."""

@@ -21,6 +21,7 @@ import numpy as np
 
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
 from airsim_mapper.simserver import camera, instruments, lidar, messages, protocol, radar
+from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.motion import Body, Kinematic
 from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
 from airsim_mapper.simserver.services import ServiceError
@@ -47,6 +48,16 @@ def mount_pose(
             0.0 if gimbal.get("lock-yaw") else yaw,
         )
     return compose(kin.position, body_q, offset_position, offset_orientation)
+
+
+def png_bytes(bgr: bytes, width: int, height: int) -> bytes:
+    """A BGR buffer as PNG (`"compress": true`; the real server compresses every non-depth type)."""
+    import cv2
+
+    ok, encoded = cv2.imencode(".png", np.frombuffer(bgr, dtype=np.uint8).reshape(height, width, 3))
+    if not ok:
+        raise RuntimeError("PNG encoding failed")
+    return encoded.tobytes()
 
 
 class Schedule:
@@ -151,9 +162,10 @@ class CameraStream:
             max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
             rendered = self.render(position, orientation, width, height, fov, types, max_depth)
             for image_type, img in rendered.items():
-                message = messages.image(
-                    now_ns, img.encoding, img.width, img.height, img.data, position, orientation
-                )
+                encoding, data = img.encoding, img.data
+                if self.captures[image_type].compress and encoding == "BGR":
+                    encoding, data = "PNG", png_bytes(data, img.width, img.height)
+                message = messages.image(now_ns, encoding, img.width, img.height, data, position, orientation)
                 latest[image_type] = message
                 path = self.topic(image_type)
                 if self.hub.is_subscribed(path):
@@ -304,8 +316,10 @@ class InstrumentStream:
         self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
         self.start_ns = start_ns
         rate = float(sensor.config.get("update-frequency", 100.0) or 100.0)
-        self.schedule = Schedule(int(1e9 / rate))
+        # the real battery publishes on every physics update (battery.cpp Update); the others at their rate
+        self.schedule = Schedule(1 if sensor.type == "battery" else int(1e9 / rate))
         self.idle = Schedule(IDLE_REFRESH_NS)
+        self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 
     def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
         """This instrument's message at `now_ns`, from `kin` (read from the body if not given)."""
@@ -322,8 +336,8 @@ class InstrumentStream:
             return instruments.magnetometer_message(kin, cfg, now_ns)
         if kind == "distance-sensor":
             return instruments.distance_message(self.world, kin, cfg, now_ns)
-        if kind == "battery":
-            return instruments.battery_message(now_ns, cfg, max(0.0, (now_ns - self.start_ns) / 1e9))
+        if self.battery is not None:
+            return self.battery.message(now_ns)
         return instruments.airspeed_message(kin, cfg, now_ns)
 
     def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
@@ -334,7 +348,8 @@ class InstrumentStream:
 
 
 class RotorStream:
-    """rotor_info of a multirotor: spinning at a hover speed while armed or flying."""
+    """rotor_info of a robot's rotors: a hover speed while armed or flying, unless SetControlSignals set
+    a rotor's output (0..1 of its max rpm) or ToggleFault stopped it."""
 
     def __init__(self, path: str, config: dict, body: Body, hub: TopicHub) -> None:
         self.path, self.body, self.hub = path, body, hub
@@ -346,23 +361,38 @@ class RotorStream:
         self.schedule = Schedule(50_000_000)
         self.idle = Schedule(IDLE_REFRESH_NS)
         self.angle = 0.0
+        self._lock = threading.Lock()
+        self._signals: dict[str, float] = {}
+        self._faults: set[str] = set()
+
+    def set_signals(self, signals: dict[str, float]) -> None:
+        with self._lock:
+            self._signals.update(signals)
+
+    def set_fault(self, actuator: str, enable: bool) -> None:
+        with self._lock:
+            if enable:
+                self._faults.add(actuator)
+            else:
+                self._faults.discard(actuator)
 
     def message(self, now_ns: int) -> dict[str, Any]:
         spinning = self.body.armed or not self.body.landed()
+        with self._lock:
+            signals, faults = dict(self._signals), set(self._faults)
         vec = []
         for rotor_id, settings in self.rotors:
+            level = signals.get(rotor_id, 0.6 if spinning else 0.0)
+            level = 0.0 if rotor_id in faults else min(1.0, max(0.0, level))
             max_rpm = float(settings.get("max-rpm", 6000.0))
-            speed = 0.6 * max_rpm * 2 * math.pi / 60 if spinning else 0.0
             direction = -1.0 if settings.get("turning-direction") == "counter-clock-wise" else 1.0
-            thrust = float(settings.get("coeff-of-thrust", 0.1)) * (0.6 if spinning else 0.0) * 4.0
-            torque = float(settings.get("coeff-of-torque", 0.04)) * (0.6 if spinning else 0.0) * direction
             vec.append(
                 {
                     "rotor_id": rotor_id,
-                    "speed": speed,
+                    "speed": level * max_rpm * 2 * math.pi / 60,
                     "angle": math.fmod(self.angle * direction, 2 * math.pi),
-                    "torque": torque,
-                    "thrust": thrust,
+                    "torque": float(settings.get("coeff-of-torque", 0.04)) * level * direction,
+                    "thrust": float(settings.get("coeff-of-thrust", 0.1)) * level * 4.0,
                 }
             )
         return {"time_stamp": int(now_ns), "rotor_info_vec": vec}

@@ -199,7 +199,7 @@ def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(wor
     from airsim_mapper.simserver.streams import CameraStream
 
     captures = (
-        CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0),
+        CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),
         CaptureSetting(2, 64, 48, 90.0, True, False),
     )
     sensor = SensorSpec("C", "camera", {}, captures=captures, capture_interval=0.1)

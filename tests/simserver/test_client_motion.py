@@ -186,6 +186,17 @@ def test_flying_into_an_object_is_stopped_and_reported_on_collision_info(client,
         ("MoveToPosition", {"x": 1e308, "y": 0.0, "z": -3.0, "velocity": 5.0}, "x"),
         ("MoveToPosition", {"x": 1.0, "y": 0.0, "z": -3.0, "velocity": 1e308}, "velocity"),
         ("RotateByYawRate", {"yaw_rate": 1e308, "duration": 1.0}, "yaw_rate"),
+        ("MoveByVelocity", {"vx": float("nan"), "vy": 0.0, "vz": 0.0, "duration": 1.0}, "vx"),
+        (
+            "MoveByHeading",
+            {"heading": 0.0, "speed": float("nan"), "vz": 0.0, "duration": 1.0, "heading_margin": 0.1},
+            "speed",
+        ),
+        (
+            "MoveByHeading",
+            {"heading": float("nan"), "speed": 1.0, "vz": 0.0, "duration": 1.0, "heading_margin": 0.1},
+            "heading",
+        ),
     ],
 )
 def test_a_motion_command_that_would_make_the_state_non_finite_gets_a_parameter_error(
@@ -193,7 +204,7 @@ def test_a_motion_command_that_would_make_the_state_non_finite_gets_a_parameter_
 ):
     teleport(drone, 0.0, 0.0, -4.0)
     defaults = {"drivetrain": 0, "yaw_is_rate": True, "yaw": 0.0, "timeout_sec": 10.0, "lookahead": -1.0}
-    defaults |= {"adaptive_lookahead": 1.0}
+    defaults |= {"adaptive_lookahead": 1.0, "yaw_rate": 0.0}
     request = {"method": f"/Sim/SceneBasicDrone/robots/Drone1/{method}", "params": defaults | params}
     with pytest.raises(RuntimeError, match=f"Parameter '{named}'"):
         client.request({**request, "version": 1.0})

@@ -70,3 +70,42 @@ def test_a_real_time_clock_reads_unix_time_and_refuses_to_pause():
         clock.continue_for(1, wait=False, what="ContinueForNSteps")
     with pytest.raises(ServiceError, match=r"This clock type doesn't support ContinueUntilSimTime\."):
         clock.continue_until(1, wait=False)
+
+
+def test_lock_step_continues_wait_for_each_step_to_be_driven_and_finished():
+    import threading
+
+    clock = SimClock(step_ns=3_000_000, paused=True, lock_step=True)
+    seen: list[int] = []
+    stop = threading.Event()
+
+    def drive():  # the server's simulation loop: one step, its work, then the step is done
+        while not stop.is_set():
+            if clock.stepping():
+                seen.append(clock.begin_step())
+                assert clock.now_ns() == seen[-1] and not clock.is_paused()
+                time.sleep(0.002)  # a slow render must not let time run on
+                clock.finish_step()
+            else:
+                time.sleep(0.0005)
+
+    driver = threading.Thread(target=drive)
+    driver.start()
+    try:
+        assert clock.continue_for(10_000_000, wait=True) == 10_000_000
+        assert seen == [3_000_000, 6_000_000, 9_000_000, 10_000_000]
+        assert clock.is_paused() and not clock.stepping()
+        time.sleep(0.01)
+        assert clock.now_ns() == 10_000_000
+        seen.clear()
+        assert clock.continue_for(clock.step_ns, wait=True) == 13_000_000 and seen == [13_000_000]
+    finally:
+        stop.set()
+        driver.join()
+
+
+def test_a_running_lock_step_clock_continues_in_wall_time():
+    clock = SimClock(step_ns=3_000_000, lock_step=True)
+    start = clock.now_ns()
+    assert clock.continue_for(20_000_000, wait=True) >= start + 20_000_000
+    assert not clock.stepping() and clock.is_paused()

@@ -93,8 +93,19 @@ def test_the_body_never_sinks_below_the_ground_and_lands_there():
     assert body.state.position[2] == pytest.approx(0.0)
     land = body_at(z=-2.0)
     command = land.run(Land())
-    run(land, 1.5)
+    run(land, 10.9)  # 2 m at LAND_SPEED (0.2 m/s), then LAND_CONFIRM_S (1 s) at rest
+    assert command.result is None and land.state.position[2] == pytest.approx(0.0)
+    run(land, 0.2)
     assert command.result is True and land.landed()
+
+
+def test_landing_on_the_ground_already_waits_for_a_descent_then_confirms():
+    body = body_at(z=0.0)
+    command = body.run(Land())
+    run(body, 10.9)
+    assert command.result is None
+    run(body, 0.2)
+    assert command.result is True
 
 
 def test_yaw_rate_and_absolute_yaw_turn_the_body():
@@ -166,3 +177,17 @@ def test_a_step_that_would_make_the_state_non_finite_ends_the_command_and_the_bo
     for values in (state.position, state.linear_velocity, state.linear_acceleration):
         assert np.all(np.isfinite(values)), values
     assert state.position.tolist() == [0.0, 0.0, -4.0]
+
+
+def test_wind_makes_an_idle_airborne_body_drift_but_not_a_commanded_or_landed_one():
+    body = body_at(z=-4.0)
+    body.wind = np.array([1.0, -0.5, 0.0])
+    run(body, 1.0)
+    assert body.state.position == pytest.approx([1.0, -0.5, -4.0], abs=1e-6)
+    body.run(Velocity([0.0, 0.0, 0.0], 1.0, YawMode()))
+    run(body, 0.5)
+    assert body.state.position == pytest.approx([1.0, -0.5, -4.0], abs=1e-6)  # the controller holds
+    grounded = body_at(z=0.0)
+    grounded.wind = np.array([3.0, 0.0, 0.0])
+    run(grounded, 1.0)
+    assert grounded.state.position == pytest.approx([0.0, 0.0, 0.0])
