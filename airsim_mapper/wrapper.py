@@ -27,6 +27,7 @@ from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
 from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
+from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.names import resolve_namespace
@@ -134,6 +135,15 @@ class ProjectAirSimWrapper:
         """Load a scene file from `sim_config_path` into the simulator and bridge it (or a Scene already
         read, with its bridges already expanded for this node: see Engine.load_scene)."""
         return self.engine.load_scene(scene_file, specs)
+
+    def apply_mapping(self, mapping: Mapping | str | Path) -> BridgeDiff:
+        """Run another mapping (a Mapping, a file, or a shipped mapping's name) from now on, restarting only
+        the bridges whose expansion changed; returns the difference (added, removed, changed). An invalid
+        mapping raises MappingError and changes nothing."""
+        mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
+        diff = self.engine.apply_mapping(mapping)
+        self.mapping = mapping
+        return diff
 
     def update_topics(self, world: Any = None) -> None:
         """Re-bridge after a mission script loaded a scene with `World(...)` on the shared client.

@@ -137,3 +137,22 @@ def test_a_scene_read_and_expanded_at_start_up_is_loaded_without_reading_or_expa
     monkeypatch.setattr(engine_module, "expand", again)
     assert rig.engine.load_scene(scene, specs) is scene
     assert set(rig.engine.bridges) == {spec.name for spec in specs}
+
+
+def test_an_edited_mapping_restarts_only_the_bridges_whose_expansion_changed(rig: Rig):
+    from airsim_mapper.mapping.loader import load_mapping_text
+
+    rig.engine.load_scene(SCENE)
+    before = dict(rig.engine.bridges)
+    edited = load_mapping_text(
+        "version: 1\nextends: default\nrules:\n  - {name: actual_pose, ros: /drones/<robot_name>/pose}\n",
+        str(SIM_CONFIG / "edited.yaml"),
+    )
+    diff = rig.engine.apply_mapping(edited)
+    assert diff.changed == ("actual_pose[Drone1]",) and not diff.added and not diff.removed
+    assert rig.engine.bridges["actual_pose[Drone1]"] is not before["actual_pose[Drone1]"]
+    assert all(
+        rig.engine.bridges[name] is bridge for name, bridge in before.items() if name != "actual_pose[Drone1]"
+    )
+    assert "/drones/Drone1/pose" in rig.ros.publishers
+    assert rig.ros.publishers["/airsim_node/Drone1/actual_pose"].unregistered

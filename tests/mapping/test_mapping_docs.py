@@ -81,3 +81,8 @@ def test_the_readme_example_does_all_three():
     images = [b for b in got.values() if b.rule == "camera_image"]
     assert len(images) == 8 and all(b.options.rate_limit_hz == 5.0 for b in images)
     assert not any(b.rule == "lidar" for b in got.values())  # the sensors scene has no Scout*
+
+
+def test_the_readme_shows_the_readme_example_as_tested_here():
+    readme = (ROOT / "README.md").read_text()
+    assert f"```yaml\n{EXAMPLES['readme']}```" in readme
