@@ -47,10 +47,11 @@ def pose_frames() -> list[bytes]:
 
 
 def radar_frames() -> list[bytes]:
+    """Stamped after every pose above: the lazy radar bridge drops what was taken before it attached."""
     return [
-        message_frame(RADAR, {"time_stamp": 1, "radar_detections": "many"}),  # wrong type
-        message_frame(RADAR, {"time_stamp": 1, "radar_detections": [{"range": 1.0}]}),  # missing fields
-        message_frame(RADAR, {"time_stamp": 1, "radar_detections": []}),  # fine
+        message_frame(RADAR, {"time_stamp": 1000, "radar_detections": "many"}),  # wrong type
+        message_frame(RADAR, {"time_stamp": 1000, "radar_detections": [{"range": 1.0}]}),  # missing fields
+        message_frame(RADAR, {"time_stamp": 1000, "radar_detections": []}),  # fine
     ]
 
 
