@@ -66,14 +66,17 @@ def mission(argv: list[str]) -> int:
     from airsim_mapper.wrapper import ProjectAirSimWrapper
 
     args = node.parse_args(argv)
+    given = {setting.name: getattr(args, setting.name) for setting in node.SETTINGS}
+    settings = {name: resolved.value for name, resolved in node.resolve_settings(given).items()}
     rospy.init_node(args.nodename or "bench_mission", disable_signals=True)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
-    client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
+    client = ProjectAirSimClient(settings["address"], settings["topicsport"], settings["servicesport"])
     client.connect()
-    world = World(client, args.scene, sim_config_path=args.simconfigpath.rstrip("/") + "/")
-    bridge = ProjectAirSimWrapper(client, sim_config_path=args.simconfigpath, tune_process=True)
+    config = settings["simconfigpath"]
+    world = World(client, settings["scene"], sim_config_path=config.rstrip("/") + "/")
+    bridge = ProjectAirSimWrapper(client, sim_config_path=config, tune_process=True)
     bridge.update_topics(world)
     stop.wait()
     rospy.signal_shutdown("benchmark done")
