@@ -16,6 +16,13 @@ import genpy
 
 from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, message_class
 
+IMU_MESSAGE = {  # a simulator IMU message, as the receive loop decodes it
+    "time_stamp": 5_000_000_000,
+    "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+    "angular_velocity": {"x": 0.1, "y": 0.0, "z": 0.0},
+    "linear_acceleration": {"x": 0.0, "y": 0.0, "z": -9.8},
+}
+
 
 def fake_client() -> Any:
     """What the engine touches of a projectairsim client when the link is fake."""

@@ -111,6 +111,16 @@ def resolve_settings(
     return _sim_config_fallback(resolved)
 
 
+def given_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """Each setting as the command line gives it (None where it says nothing), for `resolve_settings`."""
+    return {setting.name: getattr(args, setting.name) for setting in SETTINGS}
+
+
+def values(resolved: dict[str, Resolved]) -> dict[str, Any]:
+    """The values of resolved settings, by name."""
+    return {name: setting.value for name, setting in resolved.items()}
+
+
 def _sim_config_fallback(resolved: dict[str, Resolved]) -> dict[str, Resolved]:
     """The default sim_config/ is the working directory's; where there is none, the package's own."""
     from airsim_mapper.resources import package_sim_config
@@ -133,8 +143,9 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog="projectairsim_node.py",
         description=__doc__.splitlines()[0],
-        epilog="Each switch but --nodename and --shutdown-timeout is also a private parameter (~address, "
-        "~mapping, ...); the command line wins over the parameter, the parameter over the default.",
+        epilog="Each switch but --nodename, --no-watch, --shutdown-timeout and --max-frame-mb is also a "
+        "private parameter (~address, ~mapping, ...); the command line wins over the parameter, the "
+        "parameter over the default.",
     )
     parser.add_argument(
         "--nodename",
@@ -309,9 +320,9 @@ def main(argv: list[str] | None = None) -> int:
     from airsim_mapper.cli.validate import format_table
 
     node_name = args.nodename or "projectairsim"
-    given = {setting.name: getattr(args, setting.name) for setting in SETTINGS}
+    given = given_settings(args)
     # The command line's values are checked before anything connects (the master may not be up).
-    early_settings = {name: r.value for name, r in resolve_settings(given).items()}
+    early_settings = values(resolve_settings(given))
     early, problem = config_problem(early_settings, node_name, resolve_namespace(early_settings["namespace"]))
     if problem:
         print(problem, file=sys.stderr)
@@ -329,7 +340,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     for name, setting in resolved.items():
         log.info("setting %s = %r (%s)", name, setting.value, setting.source)
-    settings = {name: r.value for name, r in resolved.items()}
+    settings = values(resolved)
     # Parameters may have changed the settings, and the node's final name and namespace are known now.
     name = rospy.get_name().rsplit("/", 1)[-1]
     namespace = resolve_namespace(settings["namespace"], rospy.get_namespace())

@@ -246,7 +246,6 @@ class RosToSim(Bridge):
         self.subscriber: Any = None
         self.last_message = 0.0
         self.moving = False  # a command was sent since the last watchdog stop
-        self.pending: Any = None
         # An engine action (load_scene) acts once per message: a latched message replayed on a new
         # connection is ignored.
         self.replays = None

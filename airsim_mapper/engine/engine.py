@@ -159,9 +159,6 @@ class Engine:
         """The bridges of `scene`, or the node's own (load_scene) without one."""
         return expand(self.mapping, scene, self.node_name, self.namespace)
 
-    def node_specs(self) -> dict[str, BridgeSpec]:
-        return {spec.name: spec for spec in self.specs_for(None)}
-
     def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
         """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
         with self._lock:
@@ -265,13 +262,14 @@ class Engine:
 
     def adopt(self, scene: Scene, world: Any = None) -> None:
         """A mission script loaded `scene` itself: its load cleared every subscription, so re-bridge."""
+        specs = self.specs_for(scene)
         with self._lock:
             self._require_link("adopt")
-            self._stop_scene_bridges(keep=self.node_specs())
+            self._stop_scene_bridges(keep={s.name: s for s in specs})  # the node's own bridges stay
             self.hub.drop_all()
             self.sim.forget_all()
             self.world = world
-            self.apply(scene)
+            self.apply(scene, specs)
 
     def request_scene(self, scene_file: str) -> None:
         """Queue a scene load (from a ROS callback); it runs on the scene-loader thread. At most

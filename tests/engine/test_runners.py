@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 
 import pytest
-from fakes import FakeRos, FakeSim
+from fakes import IMU_MESSAGE, FakeRos, FakeSim
 from geometry_msgs.msg import PoseStamped, Twist
 from harness import SIM_CONFIG, wait_until
 from std_msgs.msg import String
@@ -18,13 +18,6 @@ from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.scene import read_scene
-
-IMU = {
-    "time_stamp": 5_000_000_000,
-    "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
-    "angular_velocity": {"x": 0.1, "y": 0.0, "z": 0.0},
-    "linear_acceleration": {"x": 0.0, "y": 0.0, "z": -9.8},
-}
 
 
 @pytest.fixture(scope="module")
@@ -71,13 +64,13 @@ def test_a_lazy_bridge_subscribes_to_the_simulator_only_while_ros_listens(specs,
     assert spec.options.lazy and spec.sim not in sim.subscriptions
     publisher.subscribers(1)
     assert spec.sim in sim.subscriptions
-    assert sim.deliver(spec.sim, IMU) == 1
+    assert sim.deliver(spec.sim, IMU_MESSAGE) == 1
     wait_until(lambda: len(publisher.messages) == 1, 5, what="the converted IMU message")
     imu = publisher.messages[0]
     assert imu.header.frame_id == spec.frame_id and imu.linear_acceleration.z == pytest.approx(-9.8)
     publisher.subscribers(0)
     assert spec.sim not in sim.subscriptions
-    assert sim.deliver(spec.sim, IMU) == 0
+    assert sim.deliver(spec.sim, IMU_MESSAGE) == 0
     publisher.subscribers(2)  # back again: subscribed anew
     assert spec.sim in sim.subscriptions
     bridge.stop()

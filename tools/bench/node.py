@@ -66,8 +66,7 @@ def mission(argv: list[str]) -> int:
     from airsim_mapper.wrapper import ProjectAirSimWrapper
 
     args = node.parse_args(argv)
-    given = {setting.name: getattr(args, setting.name) for setting in node.SETTINGS}
-    settings = {name: resolved.value for name, resolved in node.resolve_settings(given).items()}
+    settings = node.values(node.resolve_settings(node.given_settings(args)))
     rospy.init_node(args.nodename or "bench_mission", disable_signals=True)
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
