@@ -155,7 +155,9 @@ class TfLookup:
         """`pose_stamped` in `target`, at its stamp (the latest transform for a zero stamp, or when tf has
         none at that stamp: goals stamped with wall time meet transforms stamped with simulator time)."""
         buffer, wait = self._ready()
-        source, stamp = pose_stamped.header.frame_id, pose_stamped.header.stamp
+        # tf2 refuses names with a leading slash that tf1 accepted ("/Drone1"); both name the same frame
+        source, stamp = pose_stamped.header.frame_id.removeprefix("/"), pose_stamped.header.stamp
+        target = target.removeprefix("/")
         try:
             try:
                 transform = buffer.lookup_transform(target, source, stamp, rospy.Duration(wait))

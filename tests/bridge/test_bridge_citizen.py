@@ -210,11 +210,14 @@ def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame
         wait_until(lambda: at(0.0, 1.0, -5.0), 15, what="the body-frame goal")
         q = latest[-1].orientation
         assert math.isclose(2 * math.atan2(q.z, q.w), math.pi / 2, abs_tol=0.02)  # still facing east
+        # The same frame written tf1-style with a leading slash, which tf2 itself refuses: 1 m further east.
+        pub.publish(goal(1.0, 0.0, 0.0, "/sim1/airsim_node/Drone1"))
+        wait_until(lambda: at(0.0, 2.0, -5.0), 15, what="the slashed body-frame goal")
         # A frame tf does not know: refused with a warning naming it, nothing sent.
         pub.publish(goal(9.0, 9.0, -9.0, "nowhere_frame"))
         wait_until(lambda: "'nowhere_frame'" in node.output(), 15, what="the refusal")
         time.sleep(1.0)
-        assert at(0.0, 1.0, -5.0)
+        assert at(0.0, 2.0, -5.0)
     finally:
         sub.unregister()
         pub.unregister()
