@@ -161,9 +161,12 @@ class FakeRos:
     services: dict[str, FakeEndpoint] = field(default_factory=dict)
     transforms: list = field(default_factory=list)
     closed: bool = False
+    refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
 
     def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
         message_class(ros_type)  # the type must exist, as rospy would require
+        if name in self.refused:
+            raise ValueError(f"{name} is already advertised with another type")
         self.publishers[name] = FakePublisher(name, ros_type, latch, on_peers)
         return self.publishers[name]
 

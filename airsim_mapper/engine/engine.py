@@ -178,17 +178,29 @@ class Engine:
                 thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
             self.shared.clear()
-            for spec in specs:
-                if spec.name in self.bridges:
-                    continue
-                bridge = build(spec, self.services)
-                bridge.start()
-                self.bridges[spec.name] = bridge
+            self._start_bridges(specs, {s.name for s in specs} - set(self.bridges))
             if self._freeze_heap:
                 took_ms = freeze_heap()
                 self.gc_frozen = gc.get_freeze_count()  # counted once here: counting walks every object
                 log.debug("heap frozen in %.1f ms (%d objects)", took_ms, self.gc_frozen)
         return specs
+
+    def _start_bridges(self, specs: tuple[BridgeSpec, ...], names: set[str]) -> None:
+        """Start the bridges of `specs` named in `names`, keeping `self.bridges` in the order of `specs`.
+        A bridge that cannot start is logged with its reason and left out; the others start."""
+        for spec in specs:
+            if spec.name not in names:
+                continue
+            try:
+                bridge = build(spec, self.services)
+                bridge.start()
+            except Exception as exc:
+                log.error(
+                    "bridge %s could not start and stays off: %s: %s", spec.name, type(exc).__name__, exc
+                )
+                continue
+            self.bridges[spec.name] = bridge
+        self.bridges = {s.name: self.bridges[s.name] for s in specs if s.name in self.bridges}
 
     def _stop_scene_bridges(self, keep: dict[str, BridgeSpec]) -> None:
         """Stop every bridge except scene-independent ones whose spec is unchanged."""
@@ -217,13 +229,7 @@ class Engine:
                     self.bridges.pop(name).stop()
                 except Exception:
                     log.exception("stopping %s failed", name)
-            started = set(diff.added) | set(diff.changed)
-            for spec in specs:
-                if spec.name in started:
-                    bridge = build(spec, self.services)
-                    bridge.start()
-                    self.bridges[spec.name] = bridge
-            self.bridges = {spec.name: self.bridges[spec.name] for spec in specs if spec.name in self.bridges}
+            self._start_bridges(specs, {*diff.added, *diff.changed})
             if self._freeze_heap:
                 # No full collection here (freeze_heap's would stop every running bridge for tens of ms):
                 # the new objects join the frozen heap as they are; the stopped bridges' cycles stay.

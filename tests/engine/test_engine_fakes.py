@@ -145,3 +145,27 @@ def test_an_edited_mapping_restarts_only_the_bridges_whose_expansion_changed(rig
     )
     assert "/drones/Drone1/pose" in rig.ros.publishers
     assert rig.ros.publishers["/airsim_node/Drone1/actual_pose"].unregistered
+
+
+def test_a_bridge_that_cannot_start_stays_off_and_every_other_one_runs(rig: Rig, caplog):
+    from airsim_mapper.mapping.loader import load_mapping_text
+
+    rig.engine.load_scene(SCENE)
+    rig.ros.refused = {"/drones/Drone1/pose"}
+    edited = load_mapping_text(
+        "version: 1\nextends: default\nrules:\n"
+        "  - {name: actual_pose, ros: /drones/<robot_name>/pose}\n"
+        "  - {name: imu, ros: /drones/<robot_name>/imu}\n",
+        str(SIM_CONFIG / "edited.yaml"),
+    )
+    diff = rig.engine.apply_mapping(edited)
+    assert set(diff.changed) == {"actual_pose[Drone1]", "imu[Drone1/IMU1]"}
+    assert "actual_pose[Drone1]" not in rig.engine.bridges  # refused by ROS: off, and said so
+    assert "bridge actual_pose[Drone1] could not start" in caplog.text
+    assert "/drones/Drone1/imu" in rig.ros.publishers  # the other changed bridge started
+    assert list(rig.engine.bridges) == [
+        s.name for s in rig.engine.specs_for(rig.engine.scene) if s.name in rig.engine.bridges
+    ]
+    rig.ros.refused = set()
+    rig.engine.apply_mapping(edited)  # applying again starts what is missing
+    assert "actual_pose[Drone1]" in rig.engine.bridges
