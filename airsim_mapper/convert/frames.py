@@ -42,6 +42,8 @@ _FRD_FLU_SIGN = np.array([1.0, -1.0, -1.0])
 def canonical(q: np.ndarray) -> np.ndarray:
     """The same rotation with w >= 0 (broadcasts over leading axes)."""
     q = np.asarray(q, dtype=float)
+    if q.ndim == 1:
+        return -q if q[0] < 0.0 else q
     return np.where(q[..., :1] < 0.0, -q, q)
 
 

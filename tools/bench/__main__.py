@@ -40,6 +40,10 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         out["pose"]["idle"] = session.probe("pose_idle", [scenes.pose_topic(1)])
         # the camera at its nominal 30 Hz, with pose measured alongside: pose under nominal camera load
         out["bridge"]["camera"] = session.probe("camera", [scenes.image_topic(1), scenes.pose_topic(1)])
+    # The same idle pose stream with a mapping that drops the per-camera frames: what those frames cost.
+    lean = scenes.write_mapping_without_camera_frames(bench.config_dir)
+    with bench.bridge_session(single, node_args=("--mapping", str(lean))) as session:
+        out["pose"]["idle_without_camera_frames"] = session.probe("pose_idle_lean", [scenes.pose_topic(1)])
     with bench.bridge_session(single, profile=profile("depth")) as session:
         out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
     with bench.bridge_session(single, profile=profile("lidar")) as session:

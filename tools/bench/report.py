@@ -110,6 +110,8 @@ def e2e_table(e2e: dict[str, Any]) -> str:
     add("bridge lidar 100k @20", e2e["bridge"]["lidar"], "bridge")
     add("  (msgpack decoding, as the bare client)", e2e["bridge"]["lidar_client_path"], "bridge")
     add("bridge pose @100, idle", e2e["pose"]["idle"], "bridge")
+    if "idle_without_camera_frames" in e2e["pose"]:
+        add("  (mapping without the camera frames)", e2e["pose"]["idle_without_camera_frames"], "bridge")
     add("bridge pose @100, 1080p camera @30", e2e["bridge"]["camera"], "bridge", camera_topics[1])
     for key, label in (("camera_load", "node"), ("camera_load_mission", "mission script")):
         load = e2e["pose"].get(key)

@@ -116,3 +116,14 @@ def image_topic(drone: int, image_type: str = "scene_camera") -> str:
 
 def lidar_topic(drone: int) -> str:
     return f"/airsim_node/Drone{drone}/lidar1/lidar"
+
+
+# The default mapping's rules that every pose message feeds, per camera.
+CAMERA_FRAME_RULES = ("camera_pose", "camera_tf", "camera_optical_tf")
+
+
+def write_mapping_without_camera_frames(config_dir: Path) -> Path:
+    """A mapping file: the default one without the per-camera frames that every pose message feeds."""
+    path = Path(config_dir) / "without_camera_frames.yaml"
+    path.write_text(f"version: 1\nextends: default\nremove: [{', '.join(CAMERA_FRAME_RULES)}]\n")
+    return path
