@@ -56,6 +56,7 @@ class CaptureSetting:
     streaming_enabled: bool
     max_depth_m: float = DEFAULT_MAX_DEPTH_VIS  # depth vis: metres that map to white (max-depth-meters)
     compress: bool = True  # PNG for the non-depth types (the real server's default is true)
+    pixels_as_float: bool = False  # see image_encoding: never changes what the 1.1.0 client decodes
 
 
 @dataclass(frozen=True)
@@ -227,6 +228,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
                 bool(item.get("streaming-enabled", False)),
                 max_depth,
                 bool(item.get("compress", True)),
+                bool(item.get("pixels-as-float", False)),
             )
         )
     return tuple(captures)

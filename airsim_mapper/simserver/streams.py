@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
-from airsim_mapper.simserver import camera, instruments, lidar, messages, protocol, radar
+from airsim_mapper.simserver import camera, image_encoding, instruments, lidar, messages, protocol, radar
 from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.motion import Body, Kinematic
 from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
@@ -48,16 +48,6 @@ def mount_pose(
             0.0 if gimbal.get("lock-yaw") else yaw,
         )
     return compose(kin.position, body_q, offset_position, offset_orientation)
-
-
-def png_bytes(bgr: bytes, width: int, height: int) -> bytes:
-    """A BGR buffer as PNG (`"compress": true`; the real server compresses every non-depth type)."""
-    import cv2
-
-    ok, encoded = cv2.imencode(".png", np.frombuffer(bgr, dtype=np.uint8).reshape(height, width, 3))
-    if not ok:
-        raise RuntimeError("PNG encoding failed")
-    return encoded.tobytes()
 
 
 class Schedule:
@@ -98,6 +88,12 @@ class CameraStream:
         self.hub = hub
         self.render: Render = render or functools.partial(camera.render, world)
         self.captures = {c.image_type: c for c in sensor.enabled_captures()}
+        for image_type, capture in self.captures.items():
+            problem = image_encoding.unsupported_combination(
+                image_type, capture.compress, capture.pixels_as_float
+            )
+            if problem:
+                LOG.warning("camera %s image-type %d: %s", prefix, image_type, problem)
         self.fov = {t: c.fov_deg for t, c in self.captures.items()}
         self.offset_position = np.array(sensor.position, dtype=float)
         self.offset_orientation = np.array(sensor.orientation, dtype=float)
@@ -162,10 +158,19 @@ class CameraStream:
             max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
             rendered = self.render(position, orientation, width, height, fov, types, max_depth)
             for image_type, img in rendered.items():
-                encoding, data = img.encoding, img.data
-                if self.captures[image_type].compress and encoding == "BGR":
-                    encoding, data = "PNG", png_bytes(data, img.width, img.height)
-                message = messages.image(now_ns, encoding, img.width, img.height, data, position, orientation)
+                setting = self.captures[image_type]
+                wire = image_encoding.wire_image(
+                    image_type,
+                    img.encoding,
+                    img.data,
+                    img.width,
+                    img.height,
+                    setting.compress,
+                    setting.pixels_as_float,
+                )
+                message = messages.image(
+                    now_ns, wire.encoding, img.width, img.height, wire.data, position, orientation
+                )
                 latest[image_type] = message
                 path = self.topic(image_type)
                 if self.hub.is_subscribed(path):
