@@ -19,6 +19,7 @@ import numpy as np
 
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
+from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
 from airsim_mapper.simserver.camera import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
@@ -68,6 +69,7 @@ class SensorSpec:
     orientation: np.ndarray = field(default_factory=lambda: IDENTITY_Q.copy())
     captures: tuple[CaptureSetting, ...] = ()
     capture_interval: float = 5.0
+    annotation: AnnotationSettings | None = None  # a camera's annotation-settings, when on
 
     def enabled_captures(self) -> tuple[CaptureSetting, ...]:
         return tuple(c for c in self.captures if c.capture_enabled)
@@ -249,7 +251,15 @@ def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> Sensor
     interval = _number(sensor.get("capture-interval", 5.0), f"{here} 'capture-interval'")
     if interval <= 0:
         raise SceneError(f"{here} 'capture-interval' must be positive, got {interval}")
-    return SensorSpec(str(sensor_id), sensor_type, sensor, position, orientation, captures, interval)
+    annotation = None
+    if sensor_type == "camera":
+        try:
+            annotation = AnnotationSettings.from_config(sensor)
+        except AnnotationError as exc:
+            raise SceneError(f"{here}: {exc}") from exc
+    return SensorSpec(
+        str(sensor_id), sensor_type, sensor, position, orientation, captures, interval, annotation
+    )
 
 
 def _robot(actor: Mapping[str, Any], index: int, home: tuple[float, float, float]) -> RobotSpec:

@@ -20,7 +20,16 @@ from typing import Any, ClassVar
 import numpy as np
 
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
-from airsim_mapper.simserver import camera, image_encoding, instruments, lidar, messages, protocol, radar
+from airsim_mapper.simserver import (
+    annotations,
+    camera,
+    image_encoding,
+    instruments,
+    lidar,
+    messages,
+    protocol,
+    radar,
+)
 from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.motion import Body, Kinematic
 from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
@@ -153,6 +162,7 @@ class CameraStream:
             capture = self.captures[image_type]
             groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
         latest: dict[int, dict[str, Any]] = {}
+        boxes = self.annotations(position, orientation)
         for (width, height, fov), types in groups.items():
             vis = self.captures.get(camera.DEPTH_VIS)
             max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
@@ -169,7 +179,7 @@ class CameraStream:
                     setting.pixels_as_float,
                 )
                 message = messages.image(
-                    now_ns, wire.encoding, img.width, img.height, wire.data, position, orientation
+                    now_ns, wire.encoding, img.width, img.height, wire.data, position, orientation, boxes
                 )
                 latest[image_type] = message
                 path = self.topic(image_type)
@@ -179,6 +189,16 @@ class CameraStream:
             self._latest.update(latest)
             self._latest_ns = now_ns
             self._cond.notify_all()
+
+    def annotations(self, position: np.ndarray, orientation: np.ndarray) -> list[dict[str, Any]]:
+        """The capture's bounding boxes (annotation-settings), in the scene capture's image geometry."""
+        settings = self.sensor.annotation
+        if settings is None:
+            return []
+        scene = next((c for c in self.sensor.captures if c.image_type == camera.SCENE), None)
+        width, height = (scene.width, scene.height) if scene else annotations.DEFAULT_SIZE
+        fov = self.fov.get(camera.SCENE, scene.fov_deg if scene else annotations.DEFAULT_FOV_DEG)
+        return annotations.annotate(self.world, settings, position, orientation, width, height, fov)
 
     def get_images(self, image_types: list[int], now_ns: Callable[[], int]) -> dict[str, Any]:
         """GetImages: wait for a capture at or after the request's sim time; JSON form (data as a list)."""
