@@ -248,6 +248,10 @@ def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> Sensor
         return None
     position, orientation = _origin(sensor.get("origin"), here, home)
     captures = _captures(sensor, here) if sensor_type == "camera" else ()
+    if "report-frequency" in sensor:
+        frequency = _number(sensor["report-frequency"], f"{here} 'report-frequency'")
+        if frequency < 0:
+            raise SceneError(f"{here} 'report-frequency' must be at least 0, got {frequency:g}")
     interval = _number(sensor.get("capture-interval", 5.0), f"{here} 'capture-interval'")
     if interval <= 0:
         raise SceneError(f"{here} 'capture-interval' must be positive, got {interval}")

@@ -74,6 +74,41 @@ class Schedule:
         return False
 
 
+class ReportTimer:
+    """When the real lidar and distance sensor report (UnrealLidar/UnrealDistanceSensor TickComponent).
+
+    A `report-frequency` below 0.01 Hz (or none) reports on every tick; otherwise a tick reports once
+    1/frequency of sim time has passed since the last report, and the last report time is set back by the
+    overshoot (at most two periods) so the reports keep the frequency on average. Never twice at one time.
+    """
+
+    def __init__(self, frequency_hz: float | None) -> None:
+        hz = float(frequency_hz or 0.0)
+        self.period_ns = 0 if hz < 0.01 else round(1e9 / hz)
+        self.last_ns: int | None = None  # the (set back) time of the last report
+        self.reported_ns: int | None = None  # when it actually was
+
+    def due(self, now_ns: int) -> bool:
+        if self.last_ns is None or self.reported_ns is None:
+            self.last_ns = self.reported_ns = now_ns
+            return True
+        elapsed = now_ns - self.last_ns
+        if now_ns <= self.reported_ns or elapsed < self.period_ns:
+            return False
+        self.last_ns = now_ns - min(elapsed - self.period_ns, 2 * self.period_ns)
+        self.reported_ns = now_ns
+        return True
+
+    def reset(self) -> None:
+        self.last_ns = self.reported_ns = None
+
+
+def report_frequency(sensor: SensorSpec) -> float | None:
+    """A sensor's `report-frequency` in Hz (checked by the scene parser), None if absent."""
+    value = sensor.config.get("report-frequency")
+    return None if value is None else float(value)
+
+
 class CameraStream:
     """One camera: renders the capture-enabled types that are subscribed or requested by GetImages.
 
@@ -229,43 +264,56 @@ class CameraStream:
 
 
 class LidarStream:
-    """A lidar: one report per period (report-frequency, else one per horizontal rotation)."""
+    """A lidar: each physics tick scans the segment of its pattern since the previous tick (from the pose at
+    that tick, points in the sensor frame of that tick), and a report carries every segment since the
+    previous report, stamped and posed at report time: on every tick, or at `report-frequency` (ReportTimer).
 
-    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
+    `step` takes the time of the latest physics tick; in lock-step that is the step just simulated, free
+    running the sensor thread may see several ticks at once and scans them as one segment. Scans only
+    while subscribed.
+    """
+
+    CLOUDS = (
+        "point_cloud",
+        "azimuth_elevation_range_cloud",
+        "segmentation_cloud",
+        "intensity_cloud",
+        "laser_index_cloud",
+    )
+
+    def __init__(
+        self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub, step_ns: int
+    ) -> None:
         self.path = f"{prefix}/lidar"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
         self.model = lidar.LidarModel.from_config(dict(sensor.config))
-        rate = (
-            sensor.config.get("report-frequency")
-            or sensor.config.get("horizontal-rotation-frequency")
-            or 10.0
-        )
-        self.schedule = Schedule(int(1e9 / float(rate)))
-        self.last_ns: int | None = None
+        self.step_ns = max(1, int(step_ns))
+        self.timer = ReportTimer(report_frequency(sensor))
+        self.last_ns: int | None = None  # the tick scanned last
+        self.pending: list[dict[str, np.ndarray]] = []
 
-    def step(self, now_ns: int) -> bool:
-        if not self.schedule.due(now_ns):
-            return False
+    def step(self, tick_ns: int) -> bool:
+        """Scan the segment up to this tick (if new) and report if due; True if it scanned."""
         if not self.hub.is_subscribed(self.path):
-            self.last_ns = None
+            self.last_ns, self.pending = None, []
+            self.timer.reset()
             return False
-        start = self.last_ns if self.last_ns is not None else now_ns - self.schedule.period_ns
-        self.last_ns = now_ns
+        if self.last_ns is not None and tick_ns <= self.last_ns:
+            return False
+        start = self.last_ns if self.last_ns is not None else tick_ns - self.step_ns
+        self.last_ns = tick_ns
         position, orientation = mount_pose(
             self.body.snapshot(), self.sensor.position, self.sensor.orientation
         )
-        scan = self.model.scan(self.world, position, orientation, start, now_ns)
-        message = {"time_stamp": int(now_ns)}
-        for key in (
-            "point_cloud",
-            "azimuth_elevation_range_cloud",
-            "segmentation_cloud",
-            "intensity_cloud",
-            "laser_index_cloud",
-        ):
-            message[key] = scan.get(key, np.zeros(0, dtype=np.float32))
-        message["pose"] = messages.pose(position, orientation)
-        self.hub.publish(self.path, message)
+        self.pending.append(self.model.scan(self.world, position, orientation, start, tick_ns))
+        if self.timer.due(tick_ns):
+            message: dict[str, Any] = {"time_stamp": int(tick_ns)}
+            for key in self.CLOUDS:
+                parts = [scan[key] for scan in self.pending if key in scan]
+                message[key] = np.concatenate(parts) if parts else np.zeros(0, dtype=np.float32)
+            message["pose"] = messages.pose(position, orientation)
+            self.pending = []
+            self.hub.publish(self.path, message)
         return True
 
 
@@ -340,9 +388,9 @@ class InstrumentStream:
         self.path = f"{prefix}/{self.LEAVES[sensor.type]}"
         self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
         self.start_ns = start_ns
-        rate = float(sensor.config.get("update-frequency", 100.0) or 100.0)
-        # the real battery publishes on every physics update (battery.cpp Update); the others at their rate
-        self.schedule = Schedule(1 if sensor.type == "battery" else int(1e9 / rate))
+        # the real instruments publish on every physics update (core_sim sensors' Update; the barometer
+        # reads `update-frequency` but never uses it); the distance sensor at its `report-frequency`
+        self.timer = ReportTimer(report_frequency(sensor) if sensor.type == "distance-sensor" else None)
         self.idle = Schedule(IDLE_REFRESH_NS)
         self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 
@@ -368,7 +416,7 @@ class InstrumentStream:
     def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
         """Publish if due; `state` gives the tick's ground truth, shared by a robot's instruments."""
         subscribed = self.hub.is_subscribed(self.path)
-        if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
+        if (subscribed and self.timer.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
             self.hub.publish(self.path, self.message(now_ns, state() if state is not None else None))
 
 
