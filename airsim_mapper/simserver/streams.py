@@ -2,8 +2,9 @@
 
 Cameras, lidars and radars are heavy (ray casts) and run on the sensor thread; instruments (IMU, GPS, ...)
 and rotor info are cheap and run on the simulation thread. Heavy sensors work only while someone
-subscribes (or a GetImages call waits); instruments publish at their nominal rate while subscribed and
-refresh their cached value about once a second otherwise, so a new subscriber always gets a recent value.
+subscribes (or a GetImages call waits); instruments publish on every physics tick while subscribed (the
+distance sensor at its `report-frequency`, if given) and refresh their cached value about once a second
+otherwise, so a new subscriber always gets a recent value.
 The sensor modules (camera, lidar, radar, instruments) are pure numpy; this module only schedules them.
 """
 
