@@ -271,7 +271,7 @@ class LidarStream:
 
     `step` takes the time of the latest physics tick; in lock-step that is the step just simulated, free
     running the sensor thread may see several ticks at once and scans them as one segment. Scans only
-    while subscribed.
+    while subscribed; the first report after subscribing covers one report period.
     """
 
     CLOUDS = (
@@ -301,7 +301,11 @@ class LidarStream:
             return False
         if self.last_ns is not None and tick_ns <= self.last_ns:
             return False
-        start = self.last_ns if self.last_ns is not None else tick_ns - self.step_ns
+        # the real lidar scans whether or not anyone listens: a new subscriber's first report holds a whole
+        # report period (one tick without report-frequency), as if this one had been scanning too
+        start = (
+            self.last_ns if self.last_ns is not None else tick_ns - max(self.step_ns, self.timer.period_ns)
+        )
         self.last_ns = tick_ns
         position, orientation = mount_pose(
             self.body.snapshot(), self.sensor.position, self.sensor.orientation

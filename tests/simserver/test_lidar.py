@@ -250,16 +250,21 @@ def test_without_report_frequency_the_lidar_reports_each_ticks_segment(world, li
 def test_with_report_frequency_a_report_carries_every_segment_since_the_last(world, lidar_config):
     every, every_hub = lidar_stream(world, {k: v for k, v in lidar_config.items() if k != "report-frequency"})
     batched, batched_hub = lidar_stream(world, {**lidar_config, "report-frequency": 10})
+    scans: list[dict] = []
+    real_scan = batched.model.scan
+    batched.model.scan = lambda *args: scans.append(real_scan(*args)) or scans[-1]
     for k in range(1, 70):
         every.step(k * 3_000_000)
         batched.step(k * 3_000_000)
     stamps = [m["time_stamp"] for m in batched_hub.published]
     assert stamps == [3_000_000, 105_000_000, 204_000_000]  # the first tick, then 10 Hz on average
-    reported = sum(assert_consistent(m) for m in batched_hub.published)
-    upto = sum(assert_consistent(m) for m in every_hub.published if m["time_stamp"] <= stamps[-1])
-    assert reported == upto  # the same returns, batched
-    second = batched_hub.published[1]
-    joined = np.concatenate(
-        [m["point_cloud"] for m in every_hub.published if stamps[0] < m["time_stamp"] <= stamps[1]]
+    first, *later = [assert_consistent(m) for m in batched_hub.published]
+    # the first report after subscribing covers a whole report period, as if it had been scanning before
+    assert first > 20 * assert_consistent(every_hub.published[0])
+    # the second holds the 34 ticks' segments after the first report, joined in order
+    assert len(scans) == 69  # one per tick
+    assert np.array_equal(
+        batched_hub.published[1]["point_cloud"], np.concatenate([s["point_cloud"] for s in scans[1:35]])
     )
-    assert np.array_equal(second["point_cloud"], joined)
+    between = [assert_consistent(m) for m in every_hub.published if stamps[0] < m["time_stamp"] <= stamps[-1]]
+    assert sum(later) == pytest.approx(sum(between), rel=0.01)  # the same sweep, batched
