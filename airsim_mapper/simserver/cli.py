@@ -62,7 +62,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         services_port=args.servicesport,
         world_path=args.world,
         pose_rate_hz=args.pose_rate,
-        tick_rate_hz=max(200.0, args.pose_rate),
         render_nice=None if args.render_in_process else args.render_nice,
     )
     try:

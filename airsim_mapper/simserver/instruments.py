@@ -16,6 +16,7 @@ where they shape a value, e.g. GPS eph/epv convergence, magnetometer covariance)
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -73,13 +74,18 @@ def _number(cfg: Mapping[str, Any], key: str, default: float) -> float:
     return float(value)
 
 
+@functools.lru_cache(maxsize=256)
+def _three_numbers(value: str) -> tuple[float, ...]:
+    """The numbers of a config string (parsed once per distinct string: instruments publish every tick)."""
+    try:
+        return tuple(float(p) for p in value.split())
+    except ValueError:
+        return ()
+
+
 def _three(cfg: Mapping[str, Any], key: str, default: str) -> np.ndarray:
     value = cfg.get(key, default)
-    parts = value.split() if isinstance(value, str) else []
-    try:
-        numbers = np.array([float(p) for p in parts])
-    except ValueError:
-        numbers = np.zeros(0)
+    numbers = np.array(_three_numbers(value) if isinstance(value, str) else ())
     if numbers.size != 3 or not np.isfinite(numbers).all():
         sensor = cfg.get("id", "<sensor>")
         raise InstrumentError(f"sensor {sensor!r}: {key!r} must be a string of three numbers, got {value!r}")
@@ -120,11 +126,12 @@ def density_at(altitude_m: float) -> float:
 
 def imu_message(kin: Kinematics, sensor_cfg: Mapping[str, Any], t_ns: int) -> dict:
     """Orientation, body angular velocity and body specific force (reads -g on z when at rest, level)."""
-    specific_force = body_vector(kin, np.asarray(kin.linear_acceleration, dtype=float) - [0.0, 0.0, GRAVITY])
+    rotation = quat_to_matrix(kin.orientation)  # world vectors in the body frame: v @ rotation
+    specific_force = (np.asarray(kin.linear_acceleration, dtype=float) - [0.0, 0.0, GRAVITY]) @ rotation
     return {
         "time_stamp": int(t_ns),
         "orientation": _quat(kin.orientation),
-        "angular_velocity": _vec(body_vector(kin, kin.angular_velocity)),
+        "angular_velocity": _vec(np.asarray(kin.angular_velocity, dtype=float) @ rotation),
         "linear_acceleration": _vec(specific_force),
     }
 

@@ -130,6 +130,7 @@ def image(
     data: Any,
     position: np.ndarray,
     orientation: np.ndarray,
+    annotations: list[dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Image (§5.4) with the camera's world pose; `data` is bytes (topic) or a Raw list (GetImages)."""
     return {
@@ -148,5 +149,5 @@ def image(
         "rot_x": float(orientation[1]),
         "rot_y": float(orientation[2]),
         "rot_z": float(orientation[3]),
-        "annotations": [],
+        "annotations": annotations if annotations is not None else [],
     }

@@ -160,7 +160,9 @@ class RobotRuntime:
             if sensor.type == "camera":
                 self.cameras[sensor.id] = CameraStream(sensor, sensor_prefix, self.body, world, hub, render)
             elif sensor.type == "lidar":
-                self.heavy.append(LidarStream(sensor, sensor_prefix, self.body, world, hub))
+                self.heavy.append(
+                    LidarStream(sensor, sensor_prefix, self.body, world, hub, scene.clock.step_ns)
+                )
             elif sensor.type == "radar":
                 self.heavy.append(RadarStream(sensor, sensor_prefix, self.body, world, hub))
             else:
@@ -222,12 +224,13 @@ class RobotRuntime:
         if self.spec.multirotor:
             self.rotors.step(now_ns)
 
-    def step_heavy(self, now_ns: int) -> bool:
+    def step_heavy(self, now_ns: int, tick_ns: int) -> bool:
+        """Cameras and radars at `now_ns`; lidars scan up to the latest physics tick, `tick_ns`."""
         worked = False
         for camera in self.cameras.values():
             worked = camera.step(now_ns) or worked
         for stream in self.heavy:
-            worked = stream.step(now_ns) or worked
+            worked = stream.step(tick_ns if isinstance(stream, LidarStream) else now_ns) or worked
         return worked
 
     def start(self) -> None:

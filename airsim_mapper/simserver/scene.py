@@ -19,6 +19,7 @@ import numpy as np
 
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
+from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
 from airsim_mapper.simserver.camera import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
@@ -56,6 +57,7 @@ class CaptureSetting:
     streaming_enabled: bool
     max_depth_m: float = DEFAULT_MAX_DEPTH_VIS  # depth vis: metres that map to white (max-depth-meters)
     compress: bool = True  # PNG for the non-depth types (the real server's default is true)
+    pixels_as_float: bool = False  # see image_encoding: never changes what the 1.1.0 client decodes
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,7 @@ class SensorSpec:
     orientation: np.ndarray = field(default_factory=lambda: IDENTITY_Q.copy())
     captures: tuple[CaptureSetting, ...] = ()
     capture_interval: float = 5.0
+    annotation: AnnotationSettings | None = None  # a camera's annotation-settings, when on
 
     def enabled_captures(self) -> tuple[CaptureSetting, ...]:
         return tuple(c for c in self.captures if c.capture_enabled)
@@ -227,6 +230,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
                 bool(item.get("streaming-enabled", False)),
                 max_depth,
                 bool(item.get("compress", True)),
+                bool(item.get("pixels-as-float", False)),
             )
         )
     return tuple(captures)
@@ -244,10 +248,22 @@ def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> Sensor
         return None
     position, orientation = _origin(sensor.get("origin"), here, home)
     captures = _captures(sensor, here) if sensor_type == "camera" else ()
+    if "report-frequency" in sensor:
+        frequency = _number(sensor["report-frequency"], f"{here} 'report-frequency'")
+        if frequency < 0:
+            raise SceneError(f"{here} 'report-frequency' must be at least 0, got {frequency:g}")
     interval = _number(sensor.get("capture-interval", 5.0), f"{here} 'capture-interval'")
     if interval <= 0:
         raise SceneError(f"{here} 'capture-interval' must be positive, got {interval}")
-    return SensorSpec(str(sensor_id), sensor_type, sensor, position, orientation, captures, interval)
+    annotation = None
+    if sensor_type == "camera":
+        try:
+            annotation = AnnotationSettings.from_config(sensor)
+        except AnnotationError as exc:
+            raise SceneError(f"{here}: {exc}") from exc
+    return SensorSpec(
+        str(sensor_id), sensor_type, sensor, position, orientation, captures, interval, annotation
+    )
 
 
 def _robot(actor: Mapping[str, Any], index: int, home: tuple[float, float, float]) -> RobotSpec:

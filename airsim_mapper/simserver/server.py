@@ -19,6 +19,8 @@ LOG = logging.getLogger("airsim_mapper.simserver")
 
 DEFAULT_SCENE_PREFIX = "/Sim/SceneBasicDrone"
 NEVER_EXPIRES = 0xFFFFFFFFFFFFFFFF
+MIN_TICK_S, MAX_TICK_S = 0.001, 0.02  # bounds of the free-running physics tick period (wall seconds)
+SENSOR_IDLE_S = 0.005
 
 
 @dataclass(frozen=True)
@@ -28,7 +30,7 @@ class ServerOptions:
     services_port: int = 8990
     world_path: str | None = None
     pose_rate_hz: float = 100.0
-    tick_rate_hz: float = 200.0
+    tick_rate_hz: float | None = None  # None: one physics tick per scene clock step-ns (as the real server)
     workers: int = 32
     render_nice: int | None = RENDER_NICE  # None renders in the server's own process
 
@@ -171,8 +173,14 @@ class SimServer:
 
     # -- threads
 
+    def _tick_period_s(self, session: Session | None) -> float:
+        """Wall seconds between free-running physics ticks: the scene's step-ns (1-20 ms), unless fixed."""
+        if self.options.tick_rate_hz:
+            return 1.0 / self.options.tick_rate_hz
+        step_ns = session.spec.clock.step_ns if session is not None else 3_000_000
+        return min(max(step_ns / 1e9, MIN_TICK_S), MAX_TICK_S)
+
     def _sim_loop(self) -> None:
-        period = 1.0 / self.options.tick_rate_hz
         pose_period = 1.0 / self.options.pose_rate_hz
         next_tick = time.monotonic()
         next_pose = next_tick
@@ -193,7 +201,7 @@ class SimServer:
                         session.tick(publish_pose)
             except Exception:
                 LOG.exception("simulation tick failed")
-            next_tick += period
+            next_tick += self._tick_period_s(session)
             delay = next_tick - time.monotonic()
             if delay > 0:
                 self._stopping.wait(delay)
@@ -231,5 +239,5 @@ class SimServer:
             except Exception:
                 LOG.exception("sensor step failed")
                 self._stopping.wait(0.1)
-            if not worked:
-                self._stopping.wait(0.005)
+            if not worked:  # nothing due: look again after a physics tick (at most 5 ms)
+                self._stopping.wait(min(SENSOR_IDLE_S, self._tick_period_s(self.session)))

@@ -225,8 +225,8 @@ class Session:
 
     def sensor_tick(self) -> bool:
         """Sensor thread: render and scan what is due; True if anything was produced."""
-        now = self.clock.now_ns()
+        now, tick = self.clock.now_ns(), self.last_tick_ns
         worked = False
         for robot in self.robots.values():
-            worked = robot.step_heavy(now) or worked
+            worked = robot.step_heavy(now, tick) or worked
         return worked

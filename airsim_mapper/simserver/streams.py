@@ -2,8 +2,9 @@
 
 Cameras, lidars and radars are heavy (ray casts) and run on the sensor thread; instruments (IMU, GPS, ...)
 and rotor info are cheap and run on the simulation thread. Heavy sensors work only while someone
-subscribes (or a GetImages call waits); instruments publish at their nominal rate while subscribed and
-refresh their cached value about once a second otherwise, so a new subscriber always gets a recent value.
+subscribes (or a GetImages call waits); instruments publish on every physics tick while subscribed (the
+distance sensor at its `report-frequency`, if given) and refresh their cached value about once a second
+otherwise, so a new subscriber always gets a recent value.
 The sensor modules (camera, lidar, radar, instruments) are pure numpy; this module only schedules them.
 """
 
@@ -20,7 +21,16 @@ from typing import Any, ClassVar
 import numpy as np
 
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
-from airsim_mapper.simserver import camera, instruments, lidar, messages, protocol, radar
+from airsim_mapper.simserver import (
+    annotations,
+    camera,
+    image_encoding,
+    instruments,
+    lidar,
+    messages,
+    protocol,
+    radar,
+)
 from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.motion import Body, Kinematic
 from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
@@ -50,16 +60,6 @@ def mount_pose(
     return compose(kin.position, body_q, offset_position, offset_orientation)
 
 
-def png_bytes(bgr: bytes, width: int, height: int) -> bytes:
-    """A BGR buffer as PNG (`"compress": true`; the real server compresses every non-depth type)."""
-    import cv2
-
-    ok, encoded = cv2.imencode(".png", np.frombuffer(bgr, dtype=np.uint8).reshape(height, width, 3))
-    if not ok:
-        raise RuntimeError("PNG encoding failed")
-    return encoded.tobytes()
-
-
 class Schedule:
     """Fires every `period_ns` of sim time (the first time at once)."""
 
@@ -73,6 +73,41 @@ class Schedule:
             self.next_ns = base + self.period_ns
             return True
         return False
+
+
+class ReportTimer:
+    """When the real lidar and distance sensor report (UnrealLidar/UnrealDistanceSensor TickComponent).
+
+    A `report-frequency` below 0.01 Hz (or none) reports on every tick; otherwise a tick reports once
+    1/frequency of sim time has passed since the last report, and the last report time is set back by the
+    overshoot (at most two periods) so the reports keep the frequency on average. Never twice at one time.
+    """
+
+    def __init__(self, frequency_hz: float | None) -> None:
+        hz = float(frequency_hz or 0.0)
+        self.period_ns = 0 if hz < 0.01 else round(1e9 / hz)
+        self.last_ns: int | None = None  # the (set back) time of the last report
+        self.reported_ns: int | None = None  # when it actually was
+
+    def due(self, now_ns: int) -> bool:
+        if self.last_ns is None or self.reported_ns is None:
+            self.last_ns = self.reported_ns = now_ns
+            return True
+        elapsed = now_ns - self.last_ns
+        if now_ns <= self.reported_ns or elapsed < self.period_ns:
+            return False
+        self.last_ns = now_ns - min(elapsed - self.period_ns, 2 * self.period_ns)
+        self.reported_ns = now_ns
+        return True
+
+    def reset(self) -> None:
+        self.last_ns = self.reported_ns = None
+
+
+def report_frequency(sensor: SensorSpec) -> float | None:
+    """A sensor's `report-frequency` in Hz (checked by the scene parser), None if absent."""
+    value = sensor.config.get("report-frequency")
+    return None if value is None else float(value)
 
 
 class CameraStream:
@@ -98,6 +133,12 @@ class CameraStream:
         self.hub = hub
         self.render: Render = render or functools.partial(camera.render, world)
         self.captures = {c.image_type: c for c in sensor.enabled_captures()}
+        for image_type, capture in self.captures.items():
+            problem = image_encoding.unsupported_combination(
+                image_type, capture.compress, capture.pixels_as_float
+            )
+            if problem:
+                LOG.warning("camera %s image-type %d: %s", prefix, image_type, problem)
         self.fov = {t: c.fov_deg for t, c in self.captures.items()}
         self.offset_position = np.array(sensor.position, dtype=float)
         self.offset_orientation = np.array(sensor.orientation, dtype=float)
@@ -157,15 +198,25 @@ class CameraStream:
             capture = self.captures[image_type]
             groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
         latest: dict[int, dict[str, Any]] = {}
+        boxes = self.annotations(position, orientation)
         for (width, height, fov), types in groups.items():
             vis = self.captures.get(camera.DEPTH_VIS)
             max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
             rendered = self.render(position, orientation, width, height, fov, types, max_depth)
             for image_type, img in rendered.items():
-                encoding, data = img.encoding, img.data
-                if self.captures[image_type].compress and encoding == "BGR":
-                    encoding, data = "PNG", png_bytes(data, img.width, img.height)
-                message = messages.image(now_ns, encoding, img.width, img.height, data, position, orientation)
+                setting = self.captures[image_type]
+                wire = image_encoding.wire_image(
+                    image_type,
+                    img.encoding,
+                    img.data,
+                    img.width,
+                    img.height,
+                    setting.compress,
+                    setting.pixels_as_float,
+                )
+                message = messages.image(
+                    now_ns, wire.encoding, img.width, img.height, wire.data, position, orientation, boxes
+                )
                 latest[image_type] = message
                 path = self.topic(image_type)
                 if self.hub.is_subscribed(path):
@@ -174,6 +225,16 @@ class CameraStream:
             self._latest.update(latest)
             self._latest_ns = now_ns
             self._cond.notify_all()
+
+    def annotations(self, position: np.ndarray, orientation: np.ndarray) -> list[dict[str, Any]]:
+        """The capture's bounding boxes (annotation-settings), in the scene capture's image geometry."""
+        settings = self.sensor.annotation
+        if settings is None:
+            return []
+        scene = next((c for c in self.sensor.captures if c.image_type == camera.SCENE), None)
+        width, height = (scene.width, scene.height) if scene else annotations.DEFAULT_SIZE
+        fov = self.fov.get(camera.SCENE, scene.fov_deg if scene else annotations.DEFAULT_FOV_DEG)
+        return annotations.annotate(self.world, settings, position, orientation, width, height, fov)
 
     def get_images(self, image_types: list[int], now_ns: Callable[[], int]) -> dict[str, Any]:
         """GetImages: wait for a capture at or after the request's sim time; JSON form (data as a list)."""
@@ -204,43 +265,60 @@ class CameraStream:
 
 
 class LidarStream:
-    """A lidar: one report per period (report-frequency, else one per horizontal rotation)."""
+    """A lidar: each physics tick scans the segment of its pattern since the previous tick (from the pose at
+    that tick, points in the sensor frame of that tick), and a report carries every segment since the
+    previous report, stamped and posed at report time: on every tick, or at `report-frequency` (ReportTimer).
 
-    def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
+    `step` takes the time of the latest physics tick; in lock-step that is the step just simulated, free
+    running the sensor thread may see several ticks at once and scans them as one segment. Scans only
+    while subscribed; the first report after subscribing covers one report period.
+    """
+
+    CLOUDS = (
+        "point_cloud",
+        "azimuth_elevation_range_cloud",
+        "segmentation_cloud",
+        "intensity_cloud",
+        "laser_index_cloud",
+    )
+
+    def __init__(
+        self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub, step_ns: int
+    ) -> None:
         self.path = f"{prefix}/lidar"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
         self.model = lidar.LidarModel.from_config(dict(sensor.config))
-        rate = (
-            sensor.config.get("report-frequency")
-            or sensor.config.get("horizontal-rotation-frequency")
-            or 10.0
-        )
-        self.schedule = Schedule(int(1e9 / float(rate)))
-        self.last_ns: int | None = None
+        self.step_ns = max(1, int(step_ns))
+        self.timer = ReportTimer(report_frequency(sensor))
+        self.last_ns: int | None = None  # the tick scanned last
+        self.pending: list[dict[str, np.ndarray]] = []
 
-    def step(self, now_ns: int) -> bool:
-        if not self.schedule.due(now_ns):
-            return False
+    def step(self, tick_ns: int) -> bool:
+        """Scan the segment up to this tick (if new) and report if due; True if it scanned."""
         if not self.hub.is_subscribed(self.path):
-            self.last_ns = None
+            self.last_ns, self.pending = None, []
+            self.timer.reset()
             return False
-        start = self.last_ns if self.last_ns is not None else now_ns - self.schedule.period_ns
-        self.last_ns = now_ns
+        if self.last_ns is not None and tick_ns <= self.last_ns:
+            return False
+        # the real lidar scans whether or not anyone listens: a new subscriber's first report holds a whole
+        # report period (one tick without report-frequency), as if this one had been scanning too
+        start = (
+            self.last_ns if self.last_ns is not None else tick_ns - max(self.step_ns, self.timer.period_ns)
+        )
+        self.last_ns = tick_ns
         position, orientation = mount_pose(
             self.body.snapshot(), self.sensor.position, self.sensor.orientation
         )
-        scan = self.model.scan(self.world, position, orientation, start, now_ns)
-        message = {"time_stamp": int(now_ns)}
-        for key in (
-            "point_cloud",
-            "azimuth_elevation_range_cloud",
-            "segmentation_cloud",
-            "intensity_cloud",
-            "laser_index_cloud",
-        ):
-            message[key] = scan.get(key, np.zeros(0, dtype=np.float32))
-        message["pose"] = messages.pose(position, orientation)
-        self.hub.publish(self.path, message)
+        self.pending.append(self.model.scan(self.world, position, orientation, start, tick_ns))
+        if self.timer.due(tick_ns):
+            message: dict[str, Any] = {"time_stamp": int(tick_ns)}
+            for key in self.CLOUDS:
+                parts = [scan[key] for scan in self.pending if key in scan]
+                message[key] = np.concatenate(parts) if parts else np.zeros(0, dtype=np.float32)
+            message["pose"] = messages.pose(position, orientation)
+            self.pending = []
+            self.hub.publish(self.path, message)
         return True
 
 
@@ -315,9 +393,9 @@ class InstrumentStream:
         self.path = f"{prefix}/{self.LEAVES[sensor.type]}"
         self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
         self.start_ns = start_ns
-        rate = float(sensor.config.get("update-frequency", 100.0) or 100.0)
-        # the real battery publishes on every physics update (battery.cpp Update); the others at their rate
-        self.schedule = Schedule(1 if sensor.type == "battery" else int(1e9 / rate))
+        # the real instruments publish on every physics update (core_sim sensors' Update; the barometer
+        # reads `update-frequency` but never uses it); the distance sensor at its `report-frequency`
+        self.timer = ReportTimer(report_frequency(sensor) if sensor.type == "distance-sensor" else None)
         self.idle = Schedule(IDLE_REFRESH_NS)
         self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 
@@ -343,7 +421,7 @@ class InstrumentStream:
     def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
         """Publish if due; `state` gives the tick's ground truth, shared by a robot's instruments."""
         subscribed = self.hub.is_subscribed(self.path)
-        if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
+        if (subscribed and self.timer.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
             self.hub.publish(self.path, self.message(now_ns, state() if state is not None else None))
 
 

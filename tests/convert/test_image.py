@@ -296,3 +296,11 @@ def test_pixels_in_a_received_frame_are_published_without_a_copy():
     msg = image(sim_image("BGR", view, 4, 4), CTX)
     assert msg.data.obj is frame  # still the frame's own memory
     assert wire(msg).endswith(len(view).to_bytes(4, "little") + bytes(range(48)))
+
+
+def test_the_real_servers_empty_images_are_rejected_naming_what_is_missing():
+    # depth with "compress": true, and "compress" with "pixels-as-float": the real server sends no pixels
+    with pytest.raises(ConversionError, match=r"image: data has 0 bytes, expected 153600 for 320x240 16FC1"):
+        image(sim_image("16FC1", b"", 320, 240), CTX)
+    with pytest.raises(ConversionError, match=r"image: PNG data is empty"):
+        image(sim_image("PNG", [], 320, 240), CTX)

@@ -302,15 +302,19 @@ def test_takeoff_and_land_take_the_real_controllers_time(drone_world):
     world.resume()
 
 
-def test_compress_true_sends_png_for_colour_types_and_raw_depth(client):
+def test_compress_and_pixels_as_float_are_packed_as_the_real_server_packs_them(client):
     import cv2
     import numpy as np
     from projectairsim.utils import unpack_image
 
     config = copy.deepcopy(scene_config("scene_drone_sensors.jsonc"))
     down = next(s for s in config["actors"][0]["robot-config"]["sensors"] if s["id"] == "DownCamera")
+    settings = {s["image-type"]: s for s in down["capture-settings"]}
     for setting in down["capture-settings"]:
         setting.pop("compress")  # the real server's default is true
+    settings[2]["compress"] = False  # depth: float16 whatever pixels-as-float says
+    settings[4].update({"compress": False, "pixels-as-float": True})  # colour from the float target: BGR
+    settings[6]["pixels-as-float"] = True  # with compress: an unsupported combination, sent empty
     world = loaded(client, config)
     drone = Drone(client, world, "Drone1")
     world.pause()
@@ -319,11 +323,19 @@ def test_compress_true_sends_png_for_colour_types_and_raw_depth(client):
     published = inbox.wait_for()[-1]
     assert published["encoding"] == "PNG"
     decoded = cv2.imdecode(np.frombuffer(published["data"], dtype=np.uint8), cv2.IMREAD_COLOR)
-    images = drone.get_images("DownCamera", [0, 1, 3])
-    assert images[0]["encoding"] == "PNG" and images[3]["encoding"] == "PNG"
-    assert images[1]["encoding"] == "16FC1"  # depth is never compressed
+    images = drone.get_images("DownCamera", [0, 1, 2, 3, 4, 6])
+    assert {t: images[t]["encoding"] for t in images} == {
+        0: "PNG",
+        1: "16FC1",
+        2: "16FC1",
+        3: "PNG",
+        4: "BGR",
+        6: "PNG",
+    }
     scene = unpack_image(images[0])
     assert scene.shape == decoded.shape == (240, 320, 3)
     assert np.array_equal(scene, decoded)  # lossless, the same paused frame
-    assert unpack_image(images[1]).shape == (240, 320)
+    assert unpack_image(images[2]).shape == (240, 320) and unpack_image(images[4]).shape == (240, 320, 3)
+    # depth with compress, and compress with pixels-as-float: the real server's empty images
+    assert images[1]["data"] == [] and images[6]["data"] == []
     world.resume()

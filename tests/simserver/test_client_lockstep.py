@@ -68,3 +68,47 @@ def test_paused_stepping_never_loses_a_camera_image_or_lidar_scan(client):
     for message in camera.inbox.messages:  # every image was taken at a step's time
         assert (message["time_stamp"] - start) % STEP_NS == 0
     world.resume()
+
+
+def test_paused_steps_publish_every_instrument_and_a_lidar_segment_per_physics_step(client):
+    """Without `report-frequency` the lidar reports each step's segment, and every instrument publishes
+    once per step, as the real server does."""
+    import copy
+
+    from simserver.clientkit import scene_config
+
+    config = copy.deepcopy(scene_config("scene_drone_sensors.jsonc"))
+    sensors_cfg = config["actors"][0]["robot-config"]["sensors"]
+    next(s for s in sensors_cfg if s["id"] == "lidar1").pop("report-frequency")
+    world = World(client)
+    world.load_scene(config)
+    world.pause()
+    sensors = f"{world.parent_topic}/robots/Drone1/sensors"
+    leaves = {
+        "IMU1": "imu_kinematics",
+        "GPS": "gps",
+        "Barometer": "barometer",
+        "Magnetometer": "magnetometer",
+        "DistanceSensor": "distance_sensor",
+        "Airspeed": "airspeed",
+        "lidar1": "lidar",
+    }
+    inboxes = {sensor: subscribe(client, f"{sensors}/{sensor}/{leaf}") for sensor, leaf in leaves.items()}
+    start = world.get_sim_time()
+    now = start
+    for _ in range(30):
+        now = world.continue_for_single_step(wait_until_complete=True)
+    steps = {start + k * STEP_NS for k in range(1, 31)}
+    for sensor, inbox in inboxes.items():
+        inbox.wait_for(where=lambda m: m["time_stamp"] == now)
+        assert steps <= {m["time_stamp"] for m in inbox.messages}, sensor
+    scans = [m for m in inboxes["lidar1"].messages if m["time_stamp"] in steps]
+    assert len(scans) == 30
+    # 50,000 points/s over 16 channels: 9 or 10 columns of 16 rays in a 3 ms step (upward rays may miss);
+    # the first step's segment also covers the time from the last free-running tick to the pause
+    for scan in scans:
+        n = len(scan["segmentation_cloud"])
+        assert len(scan["point_cloud"]) == 3 * n and len(scan["laser_index_cloud"]) == n
+    assert all(len(scan["segmentation_cloud"]) <= 10 * 16 for scan in scans[1:])
+    assert sum(len(s["segmentation_cloud"]) for s in scans) > 0
+    world.resume()

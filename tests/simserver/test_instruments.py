@@ -220,7 +220,7 @@ class RecordingHub:
         self.published.append((path, message))
 
 
-def test_a_robots_instruments_share_one_snapshot_of_the_body_per_tick(monkeypatch):
+def test_a_robots_instruments_publish_every_tick_from_one_snapshot_of_the_body(monkeypatch):
     from types import SimpleNamespace
 
     from airsim_mapper.simserver.motion import Body
@@ -234,18 +234,40 @@ def test_a_robots_instruments_share_one_snapshot_of_the_body_per_tick(monkeypatc
     monkeypatch.setattr(body, "snapshot", lambda: snapshots.append(1) or original())
     hub = RecordingHub()
     world = load_world(None)
+    configs = {
+        "imu": {"update-frequency": 10},  # read by the real barometer only, and unused there: ignored
+        "gps": {},
+        "barometer": {"update-frequency": 10},
+        "distance-sensor": {"report-frequency": 50},  # the distance sensor does keep its report rate
+    }
     robot = SimpleNamespace(
         body=body,
         spec=SimpleNamespace(multirotor=False),
         instruments=[
-            InstrumentStream(SensorSpec(k, k, {"update-frequency": hz}), "/r", body, world, hub, HOME, 0)
-            for k, hz in (("imu", 100), ("gps", 10), ("barometer", 50), ("magnetometer", 50))
+            InstrumentStream(SensorSpec(k, k, cfg), "/r", body, world, hub, HOME, 0)
+            for k, cfg in configs.items()
         ],
     )
-    RobotRuntime.step_instruments(robot, 0)  # all due: four messages from one snapshot
+    RobotRuntime.step_instruments(robot, 0)  # the first tick: everything reports, from one snapshot
     assert (len(hub.published), len(snapshots)) == (4, 1)
-    RobotRuntime.step_instruments(robot, 10_000_000)  # 10 ms on: only the IMU is due
-    assert [path for path, _ in hub.published[4:]] == ["/r/imu_kinematics"]
+    RobotRuntime.step_instruments(robot, 3_000_000)  # a 3 ms tick: all but the 50 Hz distance sensor
+    assert [path for path, _ in hub.published[4:]] == ["/r/imu_kinematics", "/r/gps", "/r/barometer"]
     assert len(snapshots) == 2
-    RobotRuntime.step_instruments(robot, 15_000_000)  # nothing due: the body is not read
-    assert (len(hub.published), len(snapshots)) == (5, 2)
+    RobotRuntime.step_instruments(robot, 3_000_000)  # the same time again: nothing, the body is not read
+    assert (len(hub.published), len(snapshots)) == (7, 2)
+    for k in range(2, 8):  # the distance sensor reports once 20 ms have passed
+        RobotRuntime.step_instruments(robot, k * 3_000_000)
+    distance = [m["time_stamp"] for path, m in hub.published if path == "/r/distance_sensor"]
+    assert distance == [0, 21_000_000]
+
+
+def test_the_report_timer_keeps_the_real_sensors_rate_on_average():
+    from airsim_mapper.simserver.streams import ReportTimer
+
+    every = ReportTimer(None)
+    assert [every.due(t) for t in (0, 3, 3, 6)] == [True, True, False, True]
+    ten_hz = ReportTimer(10.0)
+    reports = [t for t in range(0, 1_000_000_001, 3_000_000) if ten_hz.due(t)]
+    # set back by each overshoot: 0, 102, 201, 300, ..., 900 ms: ten a second, none at a 3 ms gap
+    assert [r // 1_000_000 for r in reports[:4]] == [0, 102, 201, 300]
+    assert len(reports) == 10 and min(b - a for a, b in zip(reports, reports[1:])) >= 99_000_000

@@ -200,3 +200,71 @@ def test_invalid_lidar_configs_are_refused_naming_sensor_and_key(lidar_config, o
 def test_the_mount_orientation_is_read_from_the_origin(lidar_config):
     model = LidarModel.from_config(lidar_config | {"origin": {"xyz": "0 0 0", "rpy-deg": "0 0 90"}})
     assert np.allclose(model.mount_orientation, quat_from_rpy(0, 0, math.pi / 2))
+
+
+class EverythingSubscribed:
+    """The part of TopicHub a lidar stream uses: every topic subscribed, publishes kept."""
+
+    def __init__(self) -> None:
+        self.published: list[dict] = []
+
+    def is_subscribed(self, _path: str) -> bool:
+        return True
+
+    def publish(self, _path: str, message: dict) -> None:
+        self.published.append(message)
+
+
+def lidar_stream(world, config: dict, step_ns: int = 3_000_000):
+    from airsim_mapper.simserver.motion import Body
+    from airsim_mapper.simserver.scene import SensorSpec
+    from airsim_mapper.simserver.streams import LidarStream
+
+    body = Body(np.array([0.0, 0.0, -10.0]), LEVEL, lambda _p: 0.0)
+    hub = EverythingSubscribed()
+    sensor = SensorSpec("lidar1", "lidar", config, position=np.array([0.0, 0.0, 0.15]))
+    return LidarStream(sensor, "/r/sensors/lidar1", body, world, hub, step_ns), hub
+
+
+def assert_consistent(message: dict) -> int:
+    n = message["segmentation_cloud"].size
+    assert message["point_cloud"].size == 3 * n
+    assert message["intensity_cloud"].size == message["laser_index_cloud"].size == n
+    return n
+
+
+def test_without_report_frequency_the_lidar_reports_each_ticks_segment(world, lidar_config):
+    lidar_config.pop("report-frequency", None)
+    stream, hub = lidar_stream(world, lidar_config)
+    for k in range(1, 35):  # 34 ticks of 3 ms: just over a tenth of a second, a whole rotation's tenth
+        assert stream.step(k * 3_000_000) is True
+    assert stream.step(34 * 3_000_000) is False  # no new tick, no scan
+    assert [m["time_stamp"] for m in hub.published] == [k * 3_000_000 for k in range(1, 35)]
+    counts = [assert_consistent(m) for m in hub.published]
+    columns = np.concatenate([m["laser_index_cloud"] for m in hub.published])
+    # every return of the 102 ms swept (a ray looking down always hits the ground): 16 per column
+    assert sum(counts) == columns.size <= 16 * columns_per_rotation(lidar_config) * 102 // 100 + 16
+    assert max(counts) <= 16 * math.ceil(int(lidar_config["points-per-second"]) / 16 * 0.003)
+
+
+def test_with_report_frequency_a_report_carries_every_segment_since_the_last(world, lidar_config):
+    every, every_hub = lidar_stream(world, {k: v for k, v in lidar_config.items() if k != "report-frequency"})
+    batched, batched_hub = lidar_stream(world, {**lidar_config, "report-frequency": 10})
+    scans: list[dict] = []
+    real_scan = batched.model.scan
+    batched.model.scan = lambda *args: scans.append(real_scan(*args)) or scans[-1]
+    for k in range(1, 70):
+        every.step(k * 3_000_000)
+        batched.step(k * 3_000_000)
+    stamps = [m["time_stamp"] for m in batched_hub.published]
+    assert stamps == [3_000_000, 105_000_000, 204_000_000]  # the first tick, then 10 Hz on average
+    first, *later = [assert_consistent(m) for m in batched_hub.published]
+    # the first report after subscribing covers a whole report period, as if it had been scanning before
+    assert first > 20 * assert_consistent(every_hub.published[0])
+    # the second holds the 34 ticks' segments after the first report, joined in order
+    assert len(scans) == 69  # one per tick
+    assert np.array_equal(
+        batched_hub.published[1]["point_cloud"], np.concatenate([s["point_cloud"] for s in scans[1:35]])
+    )
+    between = [assert_consistent(m) for m in every_hub.published if stamps[0] < m["time_stamp"] <= stamps[-1]]
+    assert sum(later) == pytest.approx(sum(between), rel=0.01)  # the same sweep, batched

@@ -279,6 +279,38 @@ def set_sensor(scene: dict, sensor: dict) -> None:
             "'capture-interval' must be a finite number, got 'x'",
         ),
         (bad(lambda s: s["actors"][0].update(name="")), "actor #0 'name' must be a non-empty string"),
+        (
+            bad(
+                lambda s: set_sensor(s, {"id": "L", "type": "lidar", "enabled": True, "report-frequency": -1})
+            ),
+            "sensor 'L' 'report-frequency' must be at least 0, got -1",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s, {"id": "R", "type": "distance-sensor", "enabled": True, "report-frequency": "9"}
+                )
+            ),
+            "sensor 'R' 'report-frequency' must be a finite number, got '9'",
+        ),
+        (
+            bad(
+                lambda s: set_sensor(
+                    s,
+                    {
+                        "id": "C",
+                        "type": "camera",
+                        "enabled": True,
+                        "annotation-settings": {
+                            "enabled": True,
+                            "object-ids": ["A"],
+                            "bbox3D-settings": {"alignment": "x"},
+                        },
+                    },
+                )
+            ),
+            "sensor 'C': 'annotation-settings.bbox3D-settings.alignment' must be 'oriented' or 'axis'",
+        ),
     ],
 )
 def test_invalid_scenes_are_rejected_with_a_message_saying_what_is_wrong(text, message):

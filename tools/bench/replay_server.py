@@ -4,8 +4,9 @@ Cameras and lidars still run on the server's own schedule, and every message is 
 `simserver.messages` and sent by the server's `TopicHub` (protocol-faithful frames, the same sockets and
 services); only the ray casting is replaced by a cache. A camera's first frame of each size is rendered
 at an eighth of the resolution and scaled up by pixel repetition (ray casting 1080p would take seconds),
-a lidar's first scan is cast once and then repeated. Cameras render in the server's own process
-(`--render-in-process`): a render worker, a child process, would not have the cache.
+a lidar's first rotation is cast once and then replayed, as many returns per scan as its time span
+sweeps. Cameras render in the server's own process (`--render-in-process`): a render worker, a child
+process, would not have the cache.
 
     python -m tools.bench.replay_server --topicsport P --servicesport Q
 """
@@ -71,13 +72,24 @@ def cached_render(real_render: Any) -> Any:
 
 
 def cached_scan(real_scan: Any) -> Any:
-    cache: dict[int, dict[str, Any]] = {}
+    """A lidar's scan from one rotation cast once: each call takes the next returns of that rotation, as
+    many as the call's time span sweeps (a physics tick's segment, or several), cycling through it."""
+    cache: dict[int, tuple[dict[str, Any], list[int]]] = {}
 
     def scan(self: lidar.LidarModel, world: Any, position: Any, orientation: Any, start_ns: int, end_ns: int):
         if id(self) not in cache:
             period = int(1e9 / self.rotation_hz)
-            cache[id(self)] = real_scan(self, world, position, orientation, end_ns - period, end_ns)
-        return cache[id(self)]
+            cache[id(self)] = (real_scan(self, world, position, orientation, end_ns - period, end_ns), [0])
+        rotation, offset = cache[id(self)]
+        returns = rotation["segmentation_cloud"].size
+        count = round(returns * max(0, end_ns - start_ns) * self.rotation_hz / 1e9) if returns else 0
+        rows = (offset[0] + np.arange(count)) % max(returns, 1)
+        offset[0] = (offset[0] + count) % max(returns, 1)
+        out = {}
+        for key, values in rotation.items():
+            width = values.size // returns if returns and values.size else 0
+            out[key] = values.reshape(-1, width)[rows].reshape(-1) if width else values
+        return out
 
     return scan
 

@@ -60,6 +60,7 @@ def robot_config(camera: CameraSetup | None, lidar: bool) -> dict[str, Any]:
                 "range": 200.0,
                 "points-per-second": int(LIDAR_POINTS_PER_SCAN * LIDAR_HZ),
                 "horizontal-rotation-frequency": LIDAR_HZ,
+                "report-frequency": LIDAR_HZ,  # one report per rotation (else one per physics tick)
                 "horizontal-fov-start-deg": 0.0,
                 "horizontal-fov-end-deg": 360.0,
                 "vertical-fov-upper-deg": -5.0,

@@ -31,3 +31,28 @@ def test_the_render_cache_takes_camera_renders_arguments_and_renders_each_size_o
     assert calls == [(320, 180, (100.0,))]  # once, at a sixth of the size (under 320x240)
     image = frames[0]
     assert (image.width, image.height, len(image.data)) == (1920, 1080, 1920 * 1080 * 3)
+
+
+def test_the_scan_cache_replays_one_rotation_a_ticks_worth_at_a_time() -> None:
+    import numpy as np
+
+    calls = []
+
+    def real(model, world, position, orientation, start_ns, end_ns):
+        calls.append(end_ns - start_ns)
+        n = np.arange(100)
+        return {
+            "point_cloud": np.repeat(n, 3).astype(np.float32),
+            "segmentation_cloud": n.astype(np.int32),
+            "intensity_cloud": n.astype(np.float32),
+            "laser_index_cloud": n.astype(np.int32),
+            "azimuth_elevation_range_cloud": np.zeros(0, dtype=np.float32),
+        }
+
+    model = type("Model", (), {"rotation_hz": 10.0})()
+    scan = replay_server.cached_scan(real)
+    tenth = [scan(model, None, None, None, t, t + 10_000_000) for t in range(0, 120_000_000, 10_000_000)]
+    assert calls == [100_000_000]  # one rotation cast, once
+    assert [s["segmentation_cloud"].tolist() for s in tenth[:2]] == [list(range(10)), list(range(10, 20))]
+    assert tenth[10]["segmentation_cloud"].tolist() == list(range(10))  # round again
+    assert tenth[3]["point_cloud"].tolist() == np.repeat(np.arange(30, 40), 3).tolist()
