@@ -196,7 +196,7 @@ class GLRenderer:
         if programs is None:
             defines = "".join(f"#define WANT_{OUTPUTS[k][0].upper()}\n" for k in kinds)
             outputs = "".join(
-                f"layout(location = {i}) out {'float' if OUTPUTS[k][1] else 'vec4'} out_{OUTPUTS[k][0]};\n"
+                f"layout(location = {i}) out {'float' if OUTPUTS[k][1] else 'uvec4'} out_{OUTPUTS[k][0]};\n"
                 for i, k in enumerate(kinds)
             )
             common = gl_shaders.HEADER + defines + gl_shaders.FRAGMENT_COMMON.replace("OUTPUTS", outputs)
@@ -283,9 +283,9 @@ class GLRenderer:
             if depth is None:
                 depth = self._depth[(width, height)] = self.ctx.depth_renderbuffer((width, height))
             colors = [
-                self.ctx.renderbuffer((width, height), 1, dtype="f4")
+                self.ctx.renderbuffer((width, height), 1, dtype="f2")
                 if OUTPUTS[k][1]
-                else self.ctx.renderbuffer((width, height), 4, dtype="f1")
+                else self.ctx.renderbuffer((width, height), 4, dtype="u1")
                 for k in kinds
             ]
             fbo = self._framebuffers[key] = self.ctx.framebuffer(colors, depth)
@@ -364,10 +364,10 @@ class GLRenderer:
         out = {}
         for i, kind in enumerate(kinds):
             if OUTPUTS[kind][1]:
-                raw = fbo.read(components=1, attachment=i, dtype="f4")
-                out[kind] = np.frombuffer(raw, dtype="<f4").reshape(height, width)
+                raw = fbo.read(components=1, attachment=i, dtype="f2")
+                out[kind] = np.frombuffer(raw, dtype="<f2").reshape(height, width)
             else:
-                raw = fbo.read(components=3, attachment=i, dtype="f1")
+                raw = fbo.read(components=3, attachment=i, dtype="u1")
                 out[kind] = np.frombuffer(raw, dtype=np.uint8).reshape(height, width, 3)
         return out
 
@@ -395,11 +395,11 @@ class GLRenderer:
         for kind in types:
             i = kinds.index(kind)
             if OUTPUTS[kind][1]:
-                raw = fbo.read(components=1, attachment=i, dtype="f4")
-                data = np.frombuffer(raw, dtype="<f4").astype("<f2").tobytes()
+                data = fbo.read(components=1, attachment=i, dtype="f2")
                 out[kind] = camera.RenderedImage("16FC1", width, height, data)
             else:
-                out[kind] = camera.RenderedImage("BGR", width, height, fbo.read(components=3, attachment=i))
+                data = fbo.read(components=3, attachment=i, dtype="u1")
+                out[kind] = camera.RenderedImage("BGR", width, height, data)
         return out
 
 

@@ -82,9 +82,16 @@ Ray pixel_ray() {
     return Ray(d * inv, inv);
 }
 
-float byte_of(float value) { return floor(clamp(value, 0.0, 255.0)) / 255.0; }
-vec4 bgr_of(vec3 value) { return vec4(byte_of(value.x), byte_of(value.y), byte_of(value.z), 1.0); }
-vec4 gray_of(float value) { float g = byte_of(value); return vec4(g, g, g, 1.0); }
+// colours go to 8-bit unsigned integer targets: the conversion truncates, as numpy's astype(uint8) does
+uvec4 bgr_of(vec3 value) { return uvec4(uvec3(clamp(value, 0.0, 255.0)), 255u); }
+uvec4 gray_of(float value) { return uvec4(uvec3(uint(clamp(value, 0.0, 255.0))), 255u); }
+
+// depths go to float16 targets, whose stores truncate on llvmpipe: round to nearest even first, as numpy's
+// astype(float16) does (values from 65520 on become +inf)
+float half_rne(float v) {
+    uint bits = floatBitsToUint(v);
+    return v < 65520.0 ? uintBitsToFloat(bits + 0xFFFu + ((bits >> 13) & 1u)) : uintBitsToFloat(0x7f800000u);
+}
 
 // an object's hit at t, unless the ground is as near or nearer along the ray (the ground wins ties)
 bool ground_first(Ray ray, float t) { return ray.dir.z > 1e-6 && eye.z < 0.0 && -eye.z / ray.dir.z <= t; }
@@ -106,10 +113,10 @@ void emit(Ray ray, float t, vec3 shade, bool checker, vec3 normal_bgr, vec3 segm
     out_scene = bgr_of(shade * keep + sky_bgr * haze);
 #endif
 #ifdef WANT_PLANAR
-    out_planar = planar;
+    out_planar = half_rne(planar);
 #endif
 #ifdef WANT_PERSPECTIVE
-    out_perspective = t;
+    out_perspective = half_rne(t);
 #endif
 #ifdef WANT_SEGMENTATION
     out_segmentation = bgr_of(segment_bgr);
