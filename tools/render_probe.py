@@ -80,17 +80,35 @@ def embree_scene_render(world: World, segments: int) -> Callable[[int], object]:
         hits = scene.run(origins, dirs, output=1)
         prim, t, normal = hits["primID"], hits["tfar"], hits["Ng"]
         hit = prim >= 0
+        t = np.where(hit, t, np.inf)
         normal /= np.linalg.norm(normal, axis=1, keepdims=True) + 1e-12
         light = camera._AMBIENT + (1 - camera._AMBIENT) * np.clip(np.abs(normal @ sun), 0, 1)
         shade = colours[np.maximum(prim, 0)] * light[:, None]
-        d = np.where(hit, t, 1e30).astype(np.float32)
-        point = origins + dirs * d[:, None]
+        d = np.minimum(t, 1e30).astype(np.float32)
+        point = origins + dirs * np.where(hit, d, 0)[:, None]
         odd = ((np.floor(point[:, 0] / 2) + np.floor(point[:, 1] / 2)).astype(np.int64) & 1).astype(bool)
         haze = d / (d + 1500.0)
         keep = (1 - haze) * np.where(odd & (owner[np.maximum(prim, 0)] == -1), 0.85, 1.0)
         return (shade * keep[:, None] + sky * haze[:, None]).astype(np.uint8).tobytes()
 
     return render
+
+
+def embree_hits(world: World, segments: int) -> Callable[[int], object]:
+    """One intersection query of every pixel's ray (embreex traces them one by one, on one thread)."""
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    scene = rtcore_scene.EmbreeScene()
+    TriangleMesh(scene, triangles(world, segments)[0])
+    rays = camera.camera_rays(WIDTH, HEIGHT, FOV)
+
+    def hits(i: int) -> object:
+        position, orientation = POSES[i % len(POSES)]
+        dirs = np.ascontiguousarray((quat_to_matrix(orientation).astype(np.float32) @ rays).T)
+        return scene.run(np.broadcast_to(np.asarray(position, np.float32), dirs.shape).copy(), dirs, output=1)
+
+    return hits
 
 
 def timed(fn: Callable[[int], object], renders: int) -> float:
@@ -118,7 +136,10 @@ def main() -> None:
         return lambda i: gl.render(world, *POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, types)
 
     rows = {
-        "embree: hits + numpy scene shading": timed(embree_scene_render(world, args.sphere_segments), args.renders),
+        "embree: hits only": timed(embree_hits(world, args.sphere_segments), args.renders),
+        "embree: hits + numpy scene shading": timed(
+            embree_scene_render(world, args.sphere_segments), args.renders
+        ),
         "gl: scene image": timed(gl_types([camera.SCENE]), args.renders),
         "gl: all seven types": timed(gl_types(list(camera.IMAGE_TYPES)), args.renders),
         "raycast: scene image": timed(
