@@ -8,7 +8,9 @@ less than (1 - RATE_TOLERANCE) times its camera's configured rate, 1 / capture-i
 
 from __future__ import annotations
 
+import os
 import time
+from pathlib import Path
 
 import commentjson
 from bridgeharness import published_topics, wait_topic
@@ -32,6 +34,20 @@ def configured_rates() -> dict[str, tuple[float, int]]:
         for s in sensors
         if s["type"] == "camera" and s.get("enabled", True)
     }
+
+
+def render_worker_of(server_pid: int) -> int:
+    """The pid of the server's render worker (its child process)."""
+    for task in Path(f"/proc/{server_pid}/task").iterdir():
+        for child in (task / "children").read_text().split():
+            if "render_worker" in Path(f"/proc/{child}/cmdline").read_text():
+                return int(child)
+    raise AssertionError(f"the server {server_pid} has no render worker")
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def test_the_demo_scene_delivers_every_camera_at_its_configured_rate(rig_factory):
@@ -73,9 +89,13 @@ def test_the_demo_scene_delivers_every_camera_at_its_configured_rate(rig_factory
     ]
     try:
         time.sleep(WARMUP_S)
+        worker = render_worker_of(rig.sim.process.pid)
+        assert "libEGL" in Path(f"/proc/{worker}/maps").read_text(), "the cameras are not rendered with GL"
+        worker_cpu = cpu_seconds(worker)
         start = time.monotonic()
         time.sleep(WINDOW_S)
         end = time.monotonic()
+        worker_cpu = (cpu_seconds(worker) - worker_cpu) / (end - start)
         assert mission.alive(), mission.output()
     finally:
         for subscriber in subscribers:
@@ -84,6 +104,7 @@ def test_the_demo_scene_delivers_every_camera_at_its_configured_rate(rig_factory
     report = "\n".join(
         f"{rates[t]:6.1f} Hz (configured {cameras[topics[t]][0]:g}) {t}" for t in sorted(topics)
     )
+    report += f"\nrender worker: {worker_cpu:.0%} of one core"
     print(report)
     slow = [t for t in topics if rates[t] < (1.0 - RATE_TOLERANCE) * cameras[topics[t]][0]]
     assert not slow, f"cameras below their configured rate:\n{report}"
