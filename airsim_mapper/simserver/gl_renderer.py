@@ -305,7 +305,8 @@ class GLRenderer:
         max_depth_vis: float,
         max_distance: float,
     ) -> Any:
-        """Render `kinds` (sorted, distinct) into their framebuffer, which is returned for reading."""
+        """Render `kinds` (sorted, distinct) into their framebuffer, which is returned for reading (with
+        the context current in this thread)."""
         import moderngl
 
         scene = self._scene(world)
@@ -353,24 +354,6 @@ class GLRenderer:
             vao.render(moderngl.TRIANGLES, vertices=count)
         return fbo
 
-    def arrays(self, world: World, *args: Any) -> dict[int, np.ndarray]:
-        """The images as arrays: (H, W, 3) uint8 BGR, or (H, W) float32 metres for the two depth types.
-
-        Arguments as `render` takes them after the world.
-        """
-        position, orientation, width, height, fov_deg, types = args[:6]
-        kinds = tuple(sorted(set(types)))
-        fbo = self.draw(world, position, orientation, width, height, fov_deg, kinds, *args[6:])
-        out = {}
-        for i, kind in enumerate(kinds):
-            if OUTPUTS[kind][1]:
-                raw = fbo.read(components=1, attachment=i, dtype="f2")
-                out[kind] = np.frombuffer(raw, dtype="<f2").reshape(height, width)
-            else:
-                raw = fbo.read(components=3, attachment=i, dtype="u1")
-                out[kind] = np.frombuffer(raw, dtype=np.uint8).reshape(height, width, 3)
-        return out
-
     def render(
         self,
         world: World,
@@ -388,18 +371,19 @@ class GLRenderer:
         if not types:
             return {}
         kinds = tuple(sorted(types))
-        fbo = self.draw(
-            world, position, orientation, width, height, fov_deg, kinds, max_depth_vis, max_distance
-        )
         out: dict[int, camera.RenderedImage] = {}
-        for kind in types:
-            i = kinds.index(kind)
-            if OUTPUTS[kind][1]:
-                data = fbo.read(components=1, attachment=i, dtype="f2")
-                out[kind] = camera.RenderedImage("16FC1", width, height, data)
-            else:
-                data = fbo.read(components=3, attachment=i, dtype="u1")
-                out[kind] = camera.RenderedImage("BGR", width, height, data)
+        with self.ctx:  # current in this thread for the render (a context is current per thread)
+            fbo = self.draw(
+                world, position, orientation, width, height, fov_deg, kinds, max_depth_vis, max_distance
+            )
+            for kind in types:
+                i = kinds.index(kind)
+                if OUTPUTS[kind][1]:
+                    data = fbo.read(components=1, attachment=i, dtype="f2")
+                    out[kind] = camera.RenderedImage("16FC1", width, height, data)
+                else:
+                    data = fbo.read(components=3, attachment=i, dtype="u1")
+                    out[kind] = camera.RenderedImage("BGR", width, height, data)
         return out
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 
 import numpy as np
 import pytest
@@ -207,3 +208,15 @@ def test_the_gl_renderer_keeps_one_context_and_reuses_its_resources(worlds):
         gl_renderer.render(world, np.zeros(3) - [0, 0, 3], quat_from_rpy(0, 0, 0), *size, 90.0, [0, 2])
     assert {(w, h) for w, h, _ in gl._framebuffers} >= {(64, 48), (32, 24)}
     assert len(gl._programs) >= 1 and len(gl._scenes) >= 1
+
+
+def test_a_render_from_another_thread_gives_the_same_images(worlds):
+    """The context is made current in whichever thread renders (the server's sensor thread, in process)."""
+    args = (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.2, 0.6), 64, 48, 90.0, [0, 2, 3])
+    here = gl_renderer.render(worlds["default"], *args)
+    there: dict[str, object] = {}
+    world = worlds["default"]
+    thread = threading.Thread(target=lambda: there.update(images=gl_renderer.render(world, *args)))
+    thread.start()
+    thread.join()
+    assert there["images"] == here
