@@ -203,7 +203,7 @@ def test_the_gl_renderer_keeps_one_context_and_reuses_its_resources(worlds):
     world = worlds["default"]
     gl = gl_renderer.renderer()
     assert gl_renderer.renderer() is gl
-    assert "llvmpipe" in gl.description or gl.description  # a GPU's driver names itself otherwise
+    assert gl.description  # "llvmpipe (LLVM ...), 4.5 (Core Profile) Mesa ..." here; a GPU's driver elsewhere
     for size in ((64, 48), (32, 24), (64, 48)):
         gl_renderer.render(world, np.zeros(3) - [0, 0, 3], quat_from_rpy(0, 0, 0), *size, 90.0, [0, 2])
     assert {(w, h) for w, h, _ in gl._framebuffers} >= {(64, 48), (32, 24)}
