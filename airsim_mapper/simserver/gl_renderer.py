@@ -26,6 +26,7 @@ from airsim_mapper.simserver import camera, gl_shaders
 from airsim_mapper.simserver.world import World
 
 FRONT_FACE = "cw"  # counter-clockwise in NED appears clockwise in the window (image rows run down)
+GL_VERSION = 410  # the shaders' #version
 NEAR_CLIP = 1e-3  # metres; geometry closer than this to the camera is clipped
 # image type -> (fragment output name, float depth?)
 OUTPUTS = {
@@ -179,11 +180,16 @@ class GLRenderer:
             import moderngl
 
             backend = os.environ.get("AIRSIM_MAPPER_GL_BACKEND", "egl")
-            self.ctx = moderngl.create_standalone_context(backend=backend)
+            self.ctx = moderngl.create_standalone_context(backend=backend, require=GL_VERSION)
         except Exception as exc:  # ImportError, or glcontext's errors when EGL or a driver is missing
-            raise GLUnavailable(f"cannot create an OpenGL context: {exc}") from exc
+            raise GLUnavailable(f"cannot create an OpenGL {GL_VERSION / 100:g} context: {exc}") from exc
         self.description = f"{self.ctx.info['GL_RENDERER']}, {self.ctx.info['GL_VERSION']}"
         self._programs: dict[tuple[int, ...], dict[str, Any]] = {}
+        try:  # every output at once: a driver that cannot compile the shaders is found here, not mid-run
+            with self.ctx:
+                self._program_set(tuple(OUTPUTS))
+        except Exception as exc:
+            raise GLUnavailable(f"the camera shaders do not compile on {self.description}: {exc}") from exc
         self._framebuffers: dict[tuple[int, int, tuple[int, ...]], Any] = {}
         self._depth: dict[tuple[int, int], Any] = {}
         self._scenes: dict[int, tuple[World, _Scene]] = {}
