@@ -1,14 +1,15 @@
 """Camera rendering with OpenGL (moderngl): the seven image types of `camera.py` in one rasterising pass.
 
 One standalone context per process, made on first use: headless EGL (Mesa's llvmpipe on a machine without
-a GPU, multi-threaded; a GPU's driver where there is one). The ground is a full-screen pass, boxes are
-their 12 triangles, spheres are drawn as their bounding cubes and solved per fragment (`gl_shaders.py`).
+a GPU, multi-threaded; a GPU's driver where there is one). Boxes are their 12 triangles, spheres are drawn
+as their bounding cubes and solved per fragment, and the ground and sky are a full-screen pass drawn last
+(`gl_shaders.py`; docs/rendering.md).
 Each requested image type is one colour attachment of the same framebuffer, written by the same fragment,
 and read back as the exact bytes `camera.render_raycast` produces (same pinhole, shading, palette and
 encodings); tests/simserver/test_gl_renderer.py compares the two pixel by pixel.
 
-`GLUnavailable` is raised when no context can be made (no EGL library, no driver); `camera.render` then
-falls back to the ray caster.
+`GLUnavailable` is raised when no OpenGL 4.1 context can be made (no EGL library, no driver) or the
+shaders do not compile on it; `camera.render` then falls back to the ray caster.
 """
 
 from __future__ import annotations
