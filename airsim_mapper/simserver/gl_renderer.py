@@ -328,6 +328,8 @@ class GLRenderer:
             "ray0": tuple(rotation @ [1.0, -(width / 2.0 + 0.5) / f, -(height / 2.0 + 0.5) / f]),
             "ray_x": tuple(rotation[:, 1] / f),
             "ray_y": tuple(rotation[:, 2] / f),
+            "window": (float(width), float(height)),
+            "axis": tuple(rotation[:, 0]),
             "max_distance": float(max_distance),
             "max_depth_vis": float(max_depth_vis),
             "sky_bgr": scene.sky_bgr,

@@ -14,13 +14,24 @@ HEADER = """#version 410 core
 
 VERTEX_GROUND = """
 // drawn last at a constant depth just in front of the far plane: only pixels no object covered run it
+uniform vec2 window;  // width, height in pixels
+// the world direction of the ray through window point (x, y), not unit length: ray0 + x ray_x + y ray_y
+uniform vec3 ray0;
+uniform vec3 ray_x;
+uniform vec3 ray_y;
+noperspective out vec3 v_ray;  // affine in window coordinates, so interpolated exactly (and cheaply)
 const vec2 corners[3] = vec2[3](vec2(-1.0, -1.0), vec2(-1.0, 3.0), vec2(3.0, -1.0));
-void main() { gl_Position = vec4(corners[gl_VertexID], 0.999999, 1.0); }
+void main() {
+    vec2 at = (corners[gl_VertexID] * 0.5 + 0.5) * window;
+    v_ray = ray0 + at.x * ray_x + at.y * ray_y;
+    gl_Position = vec4(corners[gl_VertexID], 0.999999, 1.0);
+}
 """
 
 # boxes: one triangle per vertex triple; every attribute but the position is the face's (flat)
 VERTEX_BOX = """
 uniform mat4 clip_from_world;
+uniform vec3 eye;
 in vec3 position;
 in vec3 face_normal;
 in vec3 face_shade;
@@ -31,8 +42,10 @@ flat out vec3 v_normal;
 flat out vec3 v_shade;
 flat out vec3 v_normal_bgr;
 flat out vec3 v_segment_bgr;
+out vec3 v_ray;  // towards the surface point: interpolated, it points along the pixel's ray
 void main() {
     gl_Position = clip_from_world * vec4(position, 1.0);
+    v_ray = position - eye;
     v_point = position;
     v_normal = face_normal;
     v_shade = face_shade;
@@ -44,6 +57,7 @@ void main() {
 # spheres: drawn as their bounding cube; the fragment solves the ray-sphere quadratic (an exact impostor)
 VERTEX_SPHERE = """
 uniform mat4 clip_from_world;
+uniform vec3 eye;
 in vec3 position;
 in vec4 sphere;  // centre xyz, radius
 in vec3 base_bgr;
@@ -51,8 +65,10 @@ in vec3 face_segment_bgr;
 flat out vec4 v_sphere;
 flat out vec3 v_base;
 flat out vec3 v_segment_bgr;
+out vec3 v_ray;
 void main() {
     gl_Position = clip_from_world * vec4(position, 1.0);
+    v_ray = position - eye;
     v_sphere = sphere;
     v_base = base_bgr;
     v_segment_bgr = face_segment_bgr;
@@ -62,10 +78,7 @@ void main() {
 # the shared part of every fragment shader: the pixel's ray, and writing one hit (or the sky) to every output
 FRAGMENT_COMMON = """
 uniform vec3 eye;             // camera position, world NED
-// the world direction of the ray through window point (x, y), not unit length: ray0 + x ray_x + y ray_y
-uniform vec3 ray0;
-uniform vec3 ray_x;
-uniform vec3 ray_y;
+uniform vec3 axis;            // the camera's forward axis, world NED
 uniform float max_distance;
 uniform float max_depth_vis;
 uniform vec3 sky_bgr;
@@ -76,10 +89,11 @@ OUTPUTS
 
 struct Ray { vec3 dir; float forward; };  // unit world direction, its component along the camera axis
 
-Ray pixel_ray() {
-    vec3 d = ray0 + gl_FragCoord.x * ray_x + gl_FragCoord.y * ray_y;  // camera axis component 1
-    float inv = inversesqrt(dot(d, d));
-    return Ray(d * inv, inv);
+// the ray of this pixel, from the vertex shaders' interpolated direction: the same ray as camera_rays gives
+// pixel (u, v) = window point (u + 0.5, v + 0.5), to float32 precision
+Ray pixel_ray(vec3 towards) {
+    vec3 dir = towards * inversesqrt(dot(towards, towards));
+    return Ray(dir, dot(dir, axis));
 }
 
 // colours go to 8-bit unsigned integer targets: the conversion truncates, as numpy's astype(uint8) does
@@ -137,11 +151,12 @@ vec3 lambert(vec3 base, vec3 n) { return base * (AMBIENT + (1.0 - AMBIENT) * cla
 """
 
 FRAGMENT_GROUND = """
+noperspective in vec3 v_ray;
 uniform vec3 ground_shade;
 uniform vec3 ground_segment_bgr;
 uniform vec3 ground_normal_bgr;
 void main() {
-    Ray ray = pixel_ray();
+    Ray ray = pixel_ray(v_ray);
     float ground = -eye.z / ray.dir.z;
     bool hit = ray.dir.z > 1e-6 && eye.z < 0.0 && ground <= max_distance;
     vec3 none = vec3(0.0);
@@ -151,13 +166,14 @@ void main() {
 """
 
 FRAGMENT_BOX = """
+in vec3 v_ray;
 flat in vec3 v_point;
 flat in vec3 v_normal;
 flat in vec3 v_shade;
 flat in vec3 v_normal_bgr;
 flat in vec3 v_segment_bgr;
 void main() {
-    Ray ray = pixel_ray();
+    Ray ray = pixel_ray(v_ray);
     float facing = dot(v_normal, ray.dir);
     if (facing >= 0.0) discard;  // one-sided: a back face (seen from inside the box)
     float t = dot(v_normal, v_point - eye) / facing;
@@ -168,11 +184,12 @@ void main() {
 """
 
 FRAGMENT_SPHERE = """
+in vec3 v_ray;
 flat in vec4 v_sphere;
 flat in vec3 v_base;
 flat in vec3 v_segment_bgr;
 void main() {
-    Ray ray = pixel_ray();
+    Ray ray = pixel_ray(v_ray);
     vec3 rel = eye - v_sphere.xyz;
     float b = dot(ray.dir, rel);
     float disc = b * b - (dot(rel, rel) - v_sphere.w * v_sphere.w);
