@@ -1,10 +1,12 @@
 """GLSL of the OpenGL camera renderer (`gl_renderer.py`): one vertex shader per primitive and one fragment
 body shared by the ground, box and sphere programs.
 
-Every fragment re-derives its pixel's ray from `gl_FragCoord` exactly as `camera.camera_rays` does, hits
-its primitive analytically along that ray (ground plane, box face plane, sphere quadratic) and writes
-`gl_FragDepth` = distance / max distance, so rasterisation only decides which primitive a pixel sees.
-`OUTPUTS` is replaced by one `layout(location = i) out` per requested image kind (see `gl_renderer`).
+Every fragment takes its pixel's ray (the ray `camera.camera_rays` gives it, to float32 precision) from a
+varying the vertex shader set (interpolating it is much cheaper on llvmpipe than computing it from
+`gl_FragCoord` and uniforms), hits its primitive analytically along that ray (ground plane, box face
+plane, sphere quadratic), and objects write a logarithmic `gl_FragDepth` of the hit distance, so
+rasterisation only decides which primitive a pixel sees. `OUTPUTS` is replaced by one
+`layout(location = i) out` per requested image kind (see `gl_renderer`).
 """
 
 from __future__ import annotations
