@@ -220,3 +220,18 @@ def test_a_render_from_another_thread_gives_the_same_images(worlds):
     thread.start()
     thread.join()
     assert there["images"] == here
+
+
+@pytest.mark.parametrize(
+    ("width", "height", "fov"), [(1, 1, 90.0), (33, 17, 30.0), (101, 57, 170.0), (7, 300, 60.0)]
+)
+def test_odd_sizes_and_fields_of_view_match_the_ray_caster(worlds, width, height, fov):
+    """The pinhole holds for odd and tiny sizes, wide and narrow views (the principal point at w/2, h/2)."""
+    world = worlds["default"]
+    for position, rpy in (((0.0, 0.0, -4.0), (0.0, -0.3, 0.5)), ((20.0, 20.0, -3.0), (0.0, 0.0, 0.0))):
+        args = (np.array(position), quat_from_rpy(*rpy), width, height, fov, list(camera.IMAGE_TYPES))
+        gl = {k: pixels(v) for k, v in gl_renderer.render(world, *args).items()}
+        ray = {k: pixels(v) for k, v in camera.render_raycast(world, *args).items()}
+        for kind in camera.IMAGE_TYPES:
+            differ = (~agreement(kind, gl[kind], ray[kind], np.ones((height, width), dtype=bool))).sum()
+            assert differ <= EDGE_FRACTION * width * height + 1, (position, kind, differ)
