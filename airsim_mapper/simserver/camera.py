@@ -244,6 +244,8 @@ def render(
         except gl_renderer.GLUnavailable as exc:
             LOG.error("camera images: %s; rendering with the numpy ray caster from now on (much slower)", exc)
             _Choice.name = "raycast"
+        except gl_renderer.GLRenderError as exc:
+            LOG.warning("camera images: %s; ray casting this one", exc)
     return render_raycast(world, *args)
 
 

@@ -46,6 +46,10 @@ class GLUnavailable(RuntimeError):
     """No OpenGL context can be made in this process (the message says why)."""
 
 
+class GLRenderError(RuntimeError):
+    """OpenGL refused one render (e.g. a size beyond the driver's limit); the context stays usable."""
+
+
 @dataclass(frozen=True)
 class _Scene:
     """A world's geometry in GL buffers, and the ground's per-image constants."""
@@ -295,7 +299,12 @@ class GLRenderer:
                 else self.ctx.renderbuffer((width, height), 4, dtype="u1")
                 for k in kinds
             ]
-            fbo = self._framebuffers[key] = self.ctx.framebuffer(colors, depth)
+            try:
+                fbo = self._framebuffers[key] = self.ctx.framebuffer(colors, depth)
+            except Exception:  # e.g. a size beyond the driver's limit: keep nothing of it
+                for attachment in (*colors, self._depth.pop((width, height))):
+                    attachment.release()
+                raise
         return fbo
 
     # -- rendering
@@ -379,6 +388,27 @@ class GLRenderer:
         types = list(dict.fromkeys(image_types))
         if not types:
             return {}
+        import moderngl
+
+        try:
+            return self._render(
+                world, position, orientation, width, height, fov_deg, types, max_depth_vis, max_distance
+            )
+        except moderngl.Error as exc:
+            raise GLRenderError(f"OpenGL cannot render {width}x{height}: {exc}") from exc
+
+    def _render(
+        self,
+        world: World,
+        position: np.ndarray,
+        orientation: np.ndarray,
+        width: int,
+        height: int,
+        fov_deg: float,
+        types: list[int],
+        max_depth_vis: float,
+        max_distance: float,
+    ) -> dict[int, camera.RenderedImage]:
         kinds = tuple(sorted(types))
         out: dict[int, camera.RenderedImage] = {}
         with self.ctx:  # current in this thread for the render (a context is current per thread)

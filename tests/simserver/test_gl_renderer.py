@@ -186,6 +186,24 @@ def test_render_falls_back_to_the_ray_caster_once_without_a_gl_context(monkeypat
     assert len(errors) == 1 and "no EGL here" in errors[0] and "ray caster" in errors[0]
 
 
+def test_a_size_beyond_the_drivers_limit_is_ray_cast_with_a_warning_and_gl_goes_on(caplog):
+    world = load_world()
+    pose = (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.3, 0.0))
+    limit = gl_renderer.renderer().ctx.info["GL_MAX_RENDERBUFFER_SIZE"]
+    camera.select_renderer("gl")
+    try:
+        with caplog.at_level(logging.WARNING, logger="airsim_mapper.simserver.camera"):
+            wide = camera.render(world, *pose, limit + 1, 2, 90.0, [0, 1])
+        assert wide == camera.render_raycast(world, *pose, limit + 1, 2, 90.0, [0, 1])
+        assert f"OpenGL cannot render {limit + 1}x2" in caplog.text and "ray casting this one" in caplog.text
+        assert camera.renderer_name() == "gl"
+        assert camera.render(world, *pose, 64, 48, 90.0, [0]) == gl_renderer.render(
+            world, *pose, 64, 48, 90.0, [0]
+        )
+    finally:
+        camera.select_renderer(None)
+
+
 def test_the_renderer_is_chosen_by_the_environment(monkeypatch, caplog):
     try:
         for value, want in (("raycast", "raycast"), ("GL", "gl"), ("", "gl"), ("vulkan", "gl")):
