@@ -1,4 +1,10 @@
-"""Camera rendering by ray casting: one shared cast per frame serves every requested image type.
+"""Camera rendering: OpenGL (`gl_renderer.py`) by default, and the numpy ray caster here as the reference.
+
+`render` draws with OpenGL in this process's own headless context (Mesa's llvmpipe without a GPU). Where no
+context can be made it logs that once and ray casts instead (`render_raycast`: one shared cast per frame
+serves every requested image type). `AIRSIM_MAPPER_RENDERER=raycast` (or `airsim-mapper-sim --renderer
+raycast`, or `select_renderer`) chooses the ray caster; both produce the images described below, and
+tests/simserver/test_gl_renderer.py compares them pixel by pixel.
 
 The camera looks along its body +x (FRD: x forward, y right, z down). Pixel (u, v) (column, row, top-left
 origin) looks along (1, (u - w/2)/f, (v - h/2)/f) with f = (w/2)/tan(fov/2), the pinhole model that
@@ -16,7 +22,9 @@ Image types (Project AirSim numbering):
 
 from __future__ import annotations
 
+import logging
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -26,6 +34,9 @@ import numpy as np
 from airsim_mapper.geometry import quat_to_matrix
 from airsim_mapper.simserver.world import World
 
+LOG = logging.getLogger("airsim_mapper.simserver.camera")
+RENDERER_ENV = "AIRSIM_MAPPER_RENDERER"
+RENDERERS = ("gl", "raycast")
 SCENE, DEPTH_PLANAR, DEPTH_PERSPECTIVE, SEGMENTATION, DEPTH_VIS, DISPARITY_NORMALIZED, SURFACE_NORMALS = (
     range(7)
 )
@@ -184,6 +195,30 @@ def _normal_colors(world: World, hits) -> np.ndarray:
     return out
 
 
+class _Choice:
+    """The renderer this process uses: None until the first render reads RENDERER_ENV."""
+
+    name: str | None = None
+
+
+def select_renderer(name: str | None) -> None:
+    """Use `name` ("gl" or "raycast") from now on in this process; None reads RENDERER_ENV again."""
+    if name is not None and name not in RENDERERS:
+        raise CameraError(f"unknown renderer {name!r} (expected one of {', '.join(RENDERERS)})")
+    _Choice.name = name
+
+
+def renderer_name() -> str:
+    """The renderer `render` uses in this process: "gl" or "raycast"."""
+    if _Choice.name is None:
+        wanted = os.environ.get(RENDERER_ENV, "gl").strip().lower() or "gl"
+        if wanted not in RENDERERS:
+            LOG.error("%s=%r is not one of %s; using gl", RENDERER_ENV, wanted, ", ".join(RENDERERS))
+            wanted = "gl"
+        _Choice.name = wanted
+    return _Choice.name
+
+
 def render(
     world: World,
     position: np.ndarray,
@@ -196,6 +231,36 @@ def render(
     max_distance: float = DEFAULT_MAX_DISTANCE,
 ) -> dict[int, RenderedImage]:
     """Render the requested image types for a camera at a world NED pose (orientation w, x, y, z)."""
+    types = list(dict.fromkeys(image_types))
+    _check_request(width, height, fov_deg, types)
+    args = (position, orientation, width, height, fov_deg, types, max_depth_vis, max_distance)
+    if not types:
+        return {}
+    if renderer_name() == "gl":
+        from airsim_mapper.simserver import gl_renderer
+
+        try:
+            return gl_renderer.render(world, *args)
+        except gl_renderer.GLUnavailable as exc:
+            LOG.error("camera images: %s; rendering with the numpy ray caster from now on (much slower)", exc)
+            _Choice.name = "raycast"
+        except gl_renderer.GLRenderError as exc:
+            LOG.warning("camera images: %s; ray casting this one", exc)
+    return render_raycast(world, *args)
+
+
+def render_raycast(
+    world: World,
+    position: np.ndarray,
+    orientation: np.ndarray,
+    width: int,
+    height: int,
+    fov_deg: float,
+    image_types: Sequence[int],
+    max_depth_vis: float = DEFAULT_MAX_DEPTH_VIS,
+    max_distance: float = DEFAULT_MAX_DISTANCE,
+) -> dict[int, RenderedImage]:
+    """`render` by the numpy ray caster: the reference renderer, and the fallback without OpenGL."""
     types = list(dict.fromkeys(image_types))
     _check_request(width, height, fov_deg, types)
     if not types:

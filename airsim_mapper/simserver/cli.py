@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import sys
 import threading
 from collections.abc import Sequence
 
+from airsim_mapper.simserver import camera
 from airsim_mapper.simserver.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
 from airsim_mapper.tuning import tune_threads
@@ -43,6 +45,14 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         help="render cameras on the server's sensor thread instead of a child process",
     )
     parser.add_argument(
+        "--renderer",
+        choices=camera.RENDERERS,
+        default=None,
+        help=f"camera renderer: gl (OpenGL on headless EGL; the default) or raycast (the numpy reference, "
+        f"much slower); default: ${camera.RENDERER_ENV}, else gl. Without an OpenGL context gl falls back "
+        "to raycast and says so once",
+    )
+    parser.add_argument(
         "--log-level", default="INFO", choices=["DEBUG", "INFO", "WARNING", "ERROR"], help="logging level"
     )
     return parser.parse_args(argv)
@@ -56,6 +66,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.pose_rate <= 0:
         log.error("--pose-rate must be positive, got %s", args.pose_rate)
         return 2
+    if args.renderer is not None:  # the render worker inherits the environment
+        os.environ[camera.RENDERER_ENV] = args.renderer
+        camera.select_renderer(args.renderer)
     options = ServerOptions(
         address=args.address,
         topics_port=args.topicsport,

@@ -12,6 +12,9 @@ a socket pair and answers on the same end (pickled by `multiprocessing.connectio
 is the World; each request is the arguments of `camera.render` after the world; each answer is the dict
 of RenderedImage, or the CameraError it raised.
 
+The child renders with `camera.render`, so with OpenGL by default: its EGL context and llvmpipe's threads
+live in the child, at its priority, made on its first render (docs/rendering.md).
+
 It starts on the first render, is replaced if it dies or hangs, and exits when the server closes its end
 or dies. In a session of its own it no longer receives the signals a terminal or a supervisor sends to
 the server's process group; it ignores SIGINT and SIGTERM anyway, so a stopping server never loses its

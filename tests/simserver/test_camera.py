@@ -9,6 +9,7 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rotate
+from airsim_mapper.simserver import camera, gl_renderer
 from airsim_mapper.simserver.camera import (
     CameraError,
     camera_info_message,
@@ -24,6 +25,17 @@ SENSOR_ROBOT = {
     PROJECT: "robot_quadrotor_sensors.jsonc",
     EXAMPLES: "robot_quadrotor_fastphysics_sensors.jsonc",
 }
+
+
+@pytest.fixture(autouse=True, params=camera.RENDERERS)
+def renderer(request: pytest.FixtureRequest):
+    """Every test here runs with the OpenGL renderer and with the ray caster (the reference)."""
+    if request.param == "gl":
+        gl_renderer.renderer()  # no skip: without EGL this fails loudly (`make setup` installs it)
+    camera.select_renderer(request.param)
+    yield request.param
+    assert camera.renderer_name() == request.param  # the GL renderer did not fall back
+    camera.select_renderer(None)
 
 
 @pytest.fixture(scope="module")

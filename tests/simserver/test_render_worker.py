@@ -219,3 +219,35 @@ def test_a_worker_at_the_servers_priority_stays_in_the_servers_session():
         assert nice_of(rw.pid) == nice_of(os.getpid())
     finally:
         rw.close()
+
+
+@pytest.mark.parametrize("renderer", ["gl", "raycast"])
+def test_the_server_renders_with_gl_in_its_worker_unless_told_to_ray_cast(launcher, renderer):
+    from projectairsim import Drone
+
+    server = launcher.simserver(*(["--renderer", "raycast"] if renderer == "raycast" else []))
+    client = server.client()
+    try:
+        world = load_scene(client, "scene_basic_drone.jsonc")
+        assert set(Drone(client, world, "Drone1").get_images("DownCamera", [0, 2])) == {0, 2}
+        (kid,) = children(server.process.popen.pid)
+        maps = Path(f"/proc/{kid}/maps").read_text()
+        assert ("libEGL" in maps) == (renderer == "gl")
+    finally:
+        client.disconnect()
+
+
+def test_a_worker_without_opengl_ray_casts_and_says_so_once(monkeypatch, capfd):
+    monkeypatch.setenv("AIRSIM_MAPPER_GL_BACKEND", "no-such-backend")  # the child cannot make a context
+    monkeypatch.setenv(camera.RENDERER_ENV, "gl")
+    rw = RenderWorker(load_world())
+    try:
+        types = list(camera.IMAGE_TYPES)
+        got = [rw.render(POSITION, ORIENTATION, 64, 48, 90.0, types, 30.0) for _ in range(2)]
+        want = camera.render_raycast(load_world(), POSITION, ORIENTATION, 64, 48, 90.0, types, 30.0)
+        assert got[0] == want and got[1] == want
+        assert rw.restarts == 0
+    finally:
+        rw.close()
+    said = capfd.readouterr().err  # the child's log goes to the server's stderr
+    assert said.count("rendering with the numpy ray caster") == 1, said

@@ -1,4 +1,4 @@
-"""`make bench`: converter costs and end-to-end figures, side by side in one run; writes out/bench.json.
+"""`make bench`: converter costs, camera renderers, end-to-end figures, side by side; writes out/bench.json.
 
 python -m tools.bench [--quick] [--costs-only] [--profile] [--out out/bench.json]
 """
@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tools.bench import costs, report, scenes
+from tools.bench import costs, renderers, report, scenes
 from tools.bench.e2e import Bench
 
 CAMERA_HZ, LIDAR_HZ, POSE_HZ, SCALE_CAMERA_HZ = 30.0, scenes.LIDAR_HZ, 100.0, 10.0
@@ -82,6 +82,8 @@ def main(argv: list[str] | None = None) -> int:
         "costs": costs.run(),
     }
     print(report.costs_table(results["costs"]), flush=True)
+    results["renderers"] = renderers.run()
+    print(renderers.table(results["renderers"]), flush=True)
     if not args.costs_only:
         workdir = Path(tempfile.mkdtemp(prefix="airsim_mapper_bench_"))
         profile_dir = workdir if args.profile else None

@@ -193,6 +193,12 @@ def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
             "pixels stay a view of the received frame and are written once, by BufferImage's serialiser",
         ),
     ]
+    if "renderers" in results:
+        from tools.bench.renderers import targets as render_targets
+
+        for name, value, limit in render_targets(results["renderers"]):
+            met = None if value is None else value >= limit
+            out.append(_target(name, value, limit, met, "/s", "headless server, OpenGL on llvmpipe"))
     e2e = results.get("e2e")
     if not e2e:
         return out

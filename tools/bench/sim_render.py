@@ -1,8 +1,9 @@
 """Benchmark of the headless server's sensor rendering on one core (not a test).
 
 Prints the frame time of one 640x480 camera for each image type alone and for all seven types together
-(one shared ray cast), and the time of one 10 Hz scan of a 100k points/s lidar, against the targets:
-all seven types < 50 ms (20 Hz), one lidar scan < 100 ms (10 Hz).
+(`camera.render`: OpenGL unless AIRSIM_MAPPER_RENDERER=raycast; llvmpipe's threads count, so the CPU time
+is that of all cores), and the time of one 10 Hz scan of a 100k points/s lidar, against the targets: all
+seven types < 50 ms (20 Hz), one lidar scan < 100 ms (10 Hz).
 
     .venv/bin/python -m tools.bench.sim_render [--frames N] [--json]
 """
