@@ -1,4 +1,4 @@
-"""A good ROS citizen (issue #19): the node started without a scene, then a scene loaded over ROS, once per
+"""A good ROS citizen: the node started without a scene, then a scene loaded over ROS, once per
 request whatever the publisher latches."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Lock-step stepping with the real client: with the scene paused, every step publishes each camera image
-and lidar scan its time calls for, before the step's reply (issue #21: 1 single step in 8 lost a frame)."""
+and lidar scan its time calls for, before the step's reply (1 single step in 8 used to lose a frame)."""
 
 from __future__ import annotations
 
