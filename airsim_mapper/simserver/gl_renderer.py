@@ -390,39 +390,23 @@ class GLRenderer:
             return {}
         import moderngl
 
-        try:
-            return self._render(
-                world, position, orientation, width, height, fov_deg, types, max_depth_vis, max_distance
-            )
-        except moderngl.Error as exc:
-            raise GLRenderError(f"OpenGL cannot render {width}x{height}: {exc}") from exc
-
-    def _render(
-        self,
-        world: World,
-        position: np.ndarray,
-        orientation: np.ndarray,
-        width: int,
-        height: int,
-        fov_deg: float,
-        types: list[int],
-        max_depth_vis: float,
-        max_distance: float,
-    ) -> dict[int, camera.RenderedImage]:
         kinds = tuple(sorted(types))
         out: dict[int, camera.RenderedImage] = {}
-        with self.ctx:  # current in this thread for the render (a context is current per thread)
-            fbo = self.draw(
-                world, position, orientation, width, height, fov_deg, kinds, max_depth_vis, max_distance
-            )
-            for kind in types:
-                i = kinds.index(kind)
-                if OUTPUTS[kind][1]:
-                    data = fbo.read(components=1, attachment=i, dtype="f2")
-                    out[kind] = camera.RenderedImage("16FC1", width, height, data)
-                else:
-                    data = fbo.read(components=3, attachment=i, dtype="u1")
-                    out[kind] = camera.RenderedImage("BGR", width, height, data)
+        try:
+            with self.ctx:  # current in this thread for the render (a context is current per thread)
+                fbo = self.draw(
+                    world, position, orientation, width, height, fov_deg, kinds, max_depth_vis, max_distance
+                )
+                for kind in types:
+                    i = kinds.index(kind)
+                    if OUTPUTS[kind][1]:
+                        data = fbo.read(components=1, attachment=i, dtype="f2")
+                        out[kind] = camera.RenderedImage("16FC1", width, height, data)
+                    else:
+                        data = fbo.read(components=3, attachment=i, dtype="u1")
+                        out[kind] = camera.RenderedImage("BGR", width, height, data)
+        except moderngl.Error as exc:
+            raise GLRenderError(f"OpenGL cannot render {width}x{height}: {exc}") from exc
         return out
 
 

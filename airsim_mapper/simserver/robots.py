@@ -577,7 +577,8 @@ class RobotRuntime:
         speed = _float(params, "velocity", SPEED_LIMIT_MPS)
         return self._run(Path(points, speed, YawMode(False, 0.0, FORWARD_ONLY), _timeout(params)))
 
-    def _rover_methods(self) -> list[Method]:
+    def _control_methods(self) -> list[Method]:
+        """API control and arming, which rovers and multirotors answer alike."""
         p = self.prefix
         return [
             Method(f"{p}/EnableApiControl", (), self._flag("api_control", True)),
@@ -586,6 +587,12 @@ class RobotRuntime:
             Method(f"{p}/Arm", (), self._flag("armed", True)),
             Method(f"{p}/Disarm", (), self._flag("armed", False)),
             Method(f"{p}/CanArm", (), lambda _: True),
+        ]
+
+    def _rover_methods(self) -> list[Method]:
+        p = self.prefix
+        return [
+            *self._control_methods(),
             Method(f"{p}/SetRoverControls", ("engine", "steering_angle", "brake"), self._rover_controls),
             Method(f"{p}/MoveByHeading", HEADING_PARAMS, self._move_by_heading),
             Method(f"{p}/MoveToPosition", ("x", "y", *ROVER_PATH_PARAMS), self._rover_move_to),
@@ -596,12 +603,7 @@ class RobotRuntime:
         p = self.prefix
         ok = lambda _: True  # noqa: E731 - modes this kinematic model does not distinguish
         return [
-            Method(f"{p}/EnableApiControl", (), self._flag("api_control", True)),
-            Method(f"{p}/DisableApiControl", (), self._flag("api_control", False)),
-            Method(f"{p}/IsApiControlEnabled", (), lambda _: self.body.api_control),
-            Method(f"{p}/Arm", (), self._flag("armed", True)),
-            Method(f"{p}/Disarm", (), self._flag("armed", False)),
-            Method(f"{p}/CanArm", (), lambda _: True),
+            *self._control_methods(),
             Method(f"{p}/GetLandedState", (), lambda _: 0 if self.body.landed() else 1),
             Method(f"{p}/Takeoff", ("timeout_sec",), self._takeoff),
             Method(f"{p}/Land", ("timeout_sec",), lambda params: self._run(Land(_timeout(params)))),

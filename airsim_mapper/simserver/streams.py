@@ -392,6 +392,7 @@ class InstrumentStream:
     ) -> None:
         self.path = f"{prefix}/{self.LEAVES[sensor.type]}"
         self.sensor, self.body, self.world, self.hub, self.home_geo = sensor, body, world, hub, home_geo
+        self.config = dict(sensor.config)  # read on every tick: copied once
         self.start_ns = start_ns
         # the real instruments publish on every physics update (core_sim sensors' Update; the barometer
         # reads `update-frequency` but never uses it); the distance sensor at its `report-frequency`
@@ -402,7 +403,7 @@ class InstrumentStream:
     def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
         """This instrument's message at `now_ns`, from `kin` (read from the body if not given)."""
         kin = kin if kin is not None else ground_truth(self.body)
-        cfg = dict(self.sensor.config)
+        cfg = self.config
         kind = self.sensor.type
         if kind == "imu":
             return instruments.imu_message(kin, cfg, now_ns)

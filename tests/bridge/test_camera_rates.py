@@ -8,13 +8,15 @@ less than (1 - RATE_TOLERANCE) times its camera's configured rate, 1 / capture-i
 
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
 import commentjson
 from bridgeharness import published_topics, wait_topic
 from harness import ROOT, SIM_CONFIG, wait_until
+
+from tools.rig import descendants
+from tools.soak.cpu import cpu_mark
 
 SCENE, ROBOT = "scene_drone_sensors.jsonc", "Drone1"
 RATE_TOLERANCE = 0.1  # the arrival rate measured here, over WINDOW_S, may be this much below the config
@@ -37,17 +39,17 @@ def configured_rates() -> dict[str, tuple[float, int]]:
 
 
 def render_worker_of(server_pid: int) -> int:
-    """The pid of the server's render worker (its child process)."""
-    for task in Path(f"/proc/{server_pid}/task").iterdir():
-        for child in (task / "children").read_text().split():
-            if "render_worker" in Path(f"/proc/{child}/cmdline").read_text():
-                return int(child)
+    """The pid of the server's render worker."""
+    for pid in descendants({server_pid}):
+        if "render_worker" in Path(f"/proc/{pid}/cmdline").read_text():
+            return pid
     raise AssertionError(f"the server {server_pid} has no render worker")
 
 
 def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    mark = cpu_mark("render_worker", pid)
+    assert mark is not None, f"process {pid} has gone"
+    return mark.seconds
 
 
 def test_the_demo_scene_delivers_every_camera_at_its_configured_rate(rig_factory):
