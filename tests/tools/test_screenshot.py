@@ -130,3 +130,11 @@ def test_an_rviz_crash_is_found_in_the_whole_log_even_when_later_output_pushed_i
     log.write_text(crash.replace("exit code -6", "exit code 1") + after)
     assert not crashed_rviz(ChildExited("roslaunch", log))
     assert not crashed_rviz(ScreenshotError(crash))  # only an exited process's log counts
+
+
+def test_rviz_start_up_crashes_are_counted_across_the_restarts():
+    from tools.screenshot.screenshot import RETRIED_ENV, crashes_so_far
+
+    assert crashes_so_far({}) == 0
+    assert crashes_so_far({RETRIED_ENV: "2"}) == 2
+    assert crashes_so_far({RETRIED_ENV: "junk"}) == 0

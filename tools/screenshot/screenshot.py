@@ -24,7 +24,7 @@ import tempfile
 import threading
 import time
 import zlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -453,7 +453,8 @@ def parse_args(argv: Sequence[str] | None) -> Options:
     return Options(args.out, args.report, args.settle, args.away, args.timeout, width, height, args.keep)
 
 
-RETRIED_ENV = "AIRSIM_MAPPER_SCREENSHOT_RETRIED"
+RETRIED_ENV = "AIRSIM_MAPPER_SCREENSHOT_RETRIED"  # how many times RViz crashed at start-up so far
+RVIZ_STARTS = 3  # RViz start-ups tried before a crash counts as an error
 _RVIZ_CRASH = re.compile(r"REQUIRED process \[rviz-\d+\] has died!.*?exit code -\d+", re.S)
 
 
@@ -468,18 +469,26 @@ def crashed_rviz(exc: ScreenshotError) -> bool:
     return isinstance(exc, ChildExited) and rviz_crashed(exc.log_text())
 
 
+def crashes_so_far(environ: Mapping[str, str]) -> int:
+    """RViz start-up crashes counted by earlier attempts of this run (RETRIED_ENV)."""
+    value = environ.get(RETRIED_ENV, "")
+    return int(value) if value.isdigit() else 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     options = parse_args(args)
     try:
         report = take(options)
     except ScreenshotError as exc:
-        if crashed_rviz(exc) and not os.environ.get(RETRIED_ENV):
+        crashes = crashes_so_far(os.environ) + 1
+        if crashed_rviz(exc) and crashes < RVIZ_STARTS:
             # RViz under Xvfb and Mesa's software renderer occasionally aborts at start-up ("corrupted
-            # size vs. prev_size" in one CI run). Nothing of ours is involved: start again, once, afresh.
+            # size vs. prev_size" in one CI run; twice in a row in another). Nothing of ours is involved:
+            # start again afresh, up to RVIZ_STARTS start-ups in all.
             print("screenshot: RViz crashed at start-up; trying once more from scratch", file=sys.stderr)
             sys.stderr.flush()
-            os.environ[RETRIED_ENV] = "1"
+            os.environ[RETRIED_ENV] = str(crashes)
             os.execv(sys.executable, [sys.executable, "-m", "tools.screenshot", *args])
         print(f"screenshot: error: {exc}", file=sys.stderr)
         return 1
