@@ -10,35 +10,51 @@ from airsim_mapper.engine.streams import Handler, Stream
 
 
 class StreamHub:
-    """Attaches bridge handlers to topic streams; subscribes on the first, unsubscribes after the last."""
+    """Attaches bridge handlers to topic streams; subscribes on the first, unsubscribes after the last.
+
+    Subscribing is a frame on the topics socket and unsubscribing a service call, so the server may see
+    them out of order: a bridge attaching while another's unsubscribe of the same topic is in flight would
+    be left unsubscribed (an image bridge detaching as its camera_info bridge attaches). Each topic's
+    subscription changes therefore go one at a time: an attach waits for the unsubscribe's reply.
+    """
 
     def __init__(self, sim: SimLink, on_transforms: Callable[[list], None]) -> None:
         self._sim = sim
         self._on_transforms = on_transforms
         self._streams: dict[str, Stream] = {}
         self._lock = threading.Lock()
+        self._topic_locks: dict[str, threading.Lock] = {}  # one per topic ever attached: a bounded set
+
+    def _in_order(self, topic: str) -> threading.Lock:
+        """The lock that orders `topic`'s subscription changes."""
+        with self._lock:
+            return self._topic_locks.setdefault(topic, threading.Lock())
 
     def attach(self, topic: str, handler: Handler) -> None:
-        with self._lock:
-            stream = self._streams.get(topic)
-            if stream is not None:
-                stream.handlers = [*stream.handlers, handler]
-                return
-            stream = Stream(topic, self._on_transforms, [handler])
-            self._streams[topic] = stream
-            self._sim.subscribe(topic, stream.offer)
+        with self._in_order(topic):
+            with self._lock:
+                stream = self._streams.get(topic)
+                if stream is not None:
+                    stream.handlers = [*stream.handlers, handler]
+                    return
+                stream = Stream(topic, self._on_transforms, [handler])
+                self._streams[topic] = stream
+                sim = self._sim
+            sim.subscribe(topic, stream.offer)
 
     def detach(self, topic: str, handler: Handler) -> None:
-        with self._lock:
-            stream = self._streams.get(topic)
-            if stream is None:
-                return
-            # bound methods are made afresh on each access: equal, not identical
-            stream.handlers = [h for h in stream.handlers if h != handler]
-            if stream.handlers:
-                return
-            del self._streams[topic]
-        self._sim.unsubscribe(topic, stream.offer)
+        with self._in_order(topic):
+            with self._lock:
+                stream = self._streams.get(topic)
+                if stream is None:
+                    return
+                # bound methods are made afresh on each access: equal, not identical
+                stream.handlers = [h for h in stream.handlers if h != handler]
+                if stream.handlers:
+                    return
+                del self._streams[topic]
+                sim = self._sim
+            sim.unsubscribe(topic, stream.offer)  # the reply comes before this topic's next subscribe
         stream.stop()
 
     def sim_now(self) -> int:

@@ -41,7 +41,6 @@ from airsim_mapper.simserver.world import World
 LOG = logging.getLogger("airsim_mapper.simserver.streams")
 
 GET_IMAGES_TIMEOUT_S = 5.0
-IDLE_REFRESH_NS = 1_000_000_000
 Render = Callable[..., dict[int, camera.RenderedImage]]  # camera.render's arguments after the world
 
 
@@ -99,9 +98,6 @@ class ReportTimer:
         self.last_ns = now_ns - min(elapsed - self.period_ns, 2 * self.period_ns)
         self.reported_ns = now_ns
         return True
-
-    def reset(self) -> None:
-        self.last_ns = self.reported_ns = None
 
 
 def report_frequency(sensor: SensorSpec) -> float | None:
@@ -271,7 +267,7 @@ class LidarStream:
 
     `step` takes the time of the latest physics tick; in lock-step that is the step just simulated, free
     running the sensor thread may see several ticks at once and scans them as one segment. Scans only
-    while subscribed; the first report after subscribing covers one report period.
+    while subscribed; unheard reports are offered (scanned if a subscriber comes before the next one).
     """
 
     CLOUDS = (
@@ -290,36 +286,50 @@ class LidarStream:
         self.model = lidar.LidarModel.from_config(dict(sensor.config))
         self.step_ns = max(1, int(step_ns))
         self.timer = ReportTimer(report_frequency(sensor))
-        self.last_ns: int | None = None  # the tick scanned last
+        self.last_tick_ns: int | None = None  # the latest tick seen
+        self.scanned_ns: int | None = None  # the tick scanned last (None while nobody listens)
         self.pending: list[dict[str, np.ndarray]] = []
 
     def step(self, tick_ns: int) -> bool:
         """Scan the segment up to this tick (if new) and report if due; True if it scanned."""
-        if not self.hub.is_subscribed(self.path):
-            self.last_ns, self.pending = None, []
-            self.timer.reset()
+        if self.last_tick_ns is not None and tick_ns <= self.last_tick_ns:
             return False
-        if self.last_ns is not None and tick_ns <= self.last_ns:
-            return False
-        # the real lidar scans whether or not anyone listens: a new subscriber's first report holds a whole
-        # report period (one tick without report-frequency), as if this one had been scanning too
-        start = (
-            self.last_ns if self.last_ns is not None else tick_ns - max(self.step_ns, self.timer.period_ns)
-        )
-        self.last_ns = tick_ns
+        self.last_tick_ns = tick_ns
         position, orientation = mount_pose(
             self.body.snapshot(), self.sensor.position, self.sensor.orientation
         )
+        if not self.hub.is_subscribed(self.path):
+            # the real lidar scans whether or not anyone listens: a due report is offered, scanned only if a
+            # subscription arrives before the next one, and a new subscriber's first report covers the
+            # time since the last report, as if this one had been scanning too
+            self.scanned_ns, self.pending = None, []
+            if self.timer.due(tick_ns):
+                start = tick_ns - max(self.step_ns, self.timer.period_ns)
+                scan = functools.partial(self.model.scan, self.world, position, orientation, start, tick_ns)
+                self.hub.offer(self.path, lambda: self.report(tick_ns, [scan()], position, orientation))
+            return False
+        start = self.scanned_ns
+        if start is None:
+            reported = self.timer.reported_ns
+            start = reported if reported is not None else tick_ns - max(self.step_ns, self.timer.period_ns)
+        self.scanned_ns = tick_ns
         self.pending.append(self.model.scan(self.world, position, orientation, start, tick_ns))
         if self.timer.due(tick_ns):
-            message: dict[str, Any] = {"time_stamp": int(tick_ns)}
-            for key in self.CLOUDS:
-                parts = [scan[key] for scan in self.pending if key in scan]
-                message[key] = np.concatenate(parts) if parts else np.zeros(0, dtype=np.float32)
-            message["pose"] = messages.pose(position, orientation)
+            self.hub.publish(self.path, self.report(tick_ns, self.pending, position, orientation))
             self.pending = []
-            self.hub.publish(self.path, message)
         return True
+
+    @classmethod
+    def report(
+        cls, tick_ns: int, scans: list[dict[str, np.ndarray]], position: np.ndarray, orientation: np.ndarray
+    ) -> dict[str, Any]:
+        """The lidar message at `tick_ns`: the clouds of `scans` joined, posed at the report."""
+        message: dict[str, Any] = {"time_stamp": int(tick_ns)}
+        for key in cls.CLOUDS:
+            parts = [scan[key] for scan in scans if key in scan]
+            message[key] = np.concatenate(parts) if parts else np.zeros(0, dtype=np.float32)
+        message["pose"] = messages.pose(position, orientation)
+        return message
 
 
 class RadarStream:
@@ -334,31 +344,25 @@ class RadarStream:
         self.track_schedule = Schedule(int(float(sensor.config.get("track-interval", 0.2)) * 1e9))
 
     def step(self, now_ns: int) -> bool:
-        worked = False
+        """Detections and tracks when due, offered (made only if someone listens); True if any was made."""
         kin = self.body.snapshot()
         position, orientation = mount_pose(kin, self.sensor.position, self.sensor.orientation)
-        if self.detect_schedule.due(now_ns) and self.hub.is_subscribed(self.detections_path):
-            found = self.model.detect(self.world, position, orientation, kin.linear_velocity, now_ns)
-            self.hub.publish(
-                self.detections_path,
-                {
-                    "time_stamp": int(now_ns),
-                    "radar_detections": found,
-                    "pose": messages.pose(position, orientation),
-                },
-            )
-            worked = True
-        if self.track_schedule.due(now_ns) and self.hub.is_subscribed(self.tracks_path):
-            tracks = self.model.track(self.world, position, orientation, kin.linear_velocity, now_ns)
-            self.hub.publish(
-                self.tracks_path,
-                {
-                    "time_stamp": int(now_ns),
-                    "radar_tracks": tracks,
-                    "pose": messages.pose(position, orientation),
-                },
-            )
-            worked = True
+        velocity, pose = kin.linear_velocity, messages.pose(position, orientation)
+        worked = False
+        if self.detect_schedule.due(now_ns):
+
+            def detections() -> dict[str, Any]:
+                found = self.model.detect(self.world, position, orientation, velocity, now_ns)
+                return {"time_stamp": int(now_ns), "radar_detections": found, "pose": pose}
+
+            worked = self.hub.offer(self.detections_path, detections)
+        if self.track_schedule.due(now_ns):
+
+            def tracks() -> dict[str, Any]:
+                found = self.model.track(self.world, position, orientation, velocity, now_ns)
+                return {"time_stamp": int(now_ns), "radar_tracks": found, "pose": pose}
+
+            worked = self.hub.offer(self.tracks_path, tracks) or worked
         return worked
 
 
@@ -397,7 +401,6 @@ class InstrumentStream:
         # the real instruments publish on every physics update (core_sim sensors' Update; the barometer
         # reads `update-frequency` but never uses it); the distance sensor at its `report-frequency`
         self.timer = ReportTimer(report_frequency(sensor) if sensor.type == "distance-sensor" else None)
-        self.idle = Schedule(IDLE_REFRESH_NS)
         self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 
     def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
@@ -420,10 +423,11 @@ class InstrumentStream:
         return instruments.airspeed_message(kin, cfg, now_ns)
 
     def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
-        """Publish if due; `state` gives the tick's ground truth, shared by a robot's instruments."""
-        subscribed = self.hub.is_subscribed(self.path)
-        if (subscribed and self.timer.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
-            self.hub.publish(self.path, self.message(now_ns, state() if state is not None else None))
+        """Publish if due (offered: made only if someone listens); `state` gives the tick's ground truth,
+        shared by a robot's instruments."""
+        if self.timer.due(now_ns):
+            kin = state() if state is not None else ground_truth(self.body)
+            self.hub.offer(self.path, functools.partial(self.message, now_ns, kin))
 
 
 class RotorStream:
@@ -438,7 +442,6 @@ class RotorStream:
             if isinstance(a, dict) and a.get("type") == "rotor"
         ]
         self.schedule = Schedule(50_000_000)
-        self.idle = Schedule(IDLE_REFRESH_NS)
         self.angle = 0.0
         self._lock = threading.Lock()
         self._signals: dict[str, float] = {}
@@ -477,7 +480,6 @@ class RotorStream:
         return {"time_stamp": int(now_ns), "rotor_info_vec": vec}
 
     def step(self, now_ns: int) -> None:
-        subscribed = self.hub.is_subscribed(self.path)
-        if (subscribed and self.schedule.due(now_ns)) or (not subscribed and self.idle.due(now_ns)):
+        if self.schedule.due(now_ns):
             self.angle += 0.3
-            self.hub.publish(self.path, self.message(now_ns))
+            self.hub.offer(self.path, functools.partial(self.message, now_ns))

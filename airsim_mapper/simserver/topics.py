@@ -4,6 +4,11 @@ Every publish caches the serialised body; a MESSAGE frame is sent only while the
 A SUBSCRIBE frame marks the topic and immediately sends its cached value (this is how `/$topics` and
 camera info reach the client, protocol.md §2.4-§2.5). When the client's pipe goes away, every
 subscription is cleared.
+
+Sensors publish on every tick whether or not anyone listens, as the real ones do, so a subscription that
+arrives just after a tick (subscribe and step go on different sockets) gets that tick's sample. A topic
+nobody subscribes to is `offer`ed instead: the cache keeps a function that makes the sample, called only if
+a subscription or a reader asks for it.
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ class TopicInfo:
 
 
 MessageHandler = Callable[[str, Any], None]
+Make = Callable[[], Any]
 
 
 def topic_list_message(infos: Iterable[TopicInfo]) -> list[dict[str, Any]]:
@@ -67,7 +73,7 @@ class TopicHub:
         self._outbox = Outbox(self._write)
         self._table: dict[str, TopicInfo] = {}
         self._subscribed: set[str] = set()
-        self._cache: dict[str, bytes] = {}
+        self._cache: dict[str, bytes | Make] = {}  # a function: a sample offered but not made yet
         self._handlers: dict[str, MessageHandler] = {}
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._recv_loop, name="topics-recv", daemon=True)
@@ -108,8 +114,16 @@ class TopicHub:
             return set(self._subscribed)
 
     def cached(self, path: str) -> bytes | None:
+        """The last value of `path`, packed (an offered sample is made now)."""
         with self._lock:
-            return self._cache.get(path)
+            return self._made(path)
+
+    def _made(self, path: str) -> bytes | None:
+        """The cached body of `path`, making an offered sample first (call with the lock held)."""
+        cached = self._cache.get(path)
+        if callable(cached):
+            cached = self._cache[path] = protocol.pack(cached())
+        return cached
 
     # -- publishing
 
@@ -120,10 +134,20 @@ class TopicHub:
             if path not in self._table:
                 return False
             self._cache[path] = body
-            subscribed = path in self._subscribed
-        if subscribed:
-            self._send(path, body)
+            if path in self._subscribed:  # queued under the lock, so frames keep the order of their caching
+                self._send(path, body)
         return True
+
+    def offer(self, path: str, make: Make) -> bool:
+        """Publish `make()` if `path` is subscribed; else keep `make` as its last value, made only if a
+        subscription or `cached` asks for it. True if it was made now."""
+        with self._lock:
+            if path not in self._table:
+                return False
+            if path not in self._subscribed:
+                self._cache[path] = make
+                return False
+        return self.publish(path, make())
 
     def unsubscribe(self, paths: Iterable[str]) -> bool:
         """The `/Sim/Unsubscribe` service: false if any path is not a registered topic."""
@@ -183,9 +207,14 @@ class TopicHub:
                 LOG.error("subscribe to unknown topic %s", path)
                 return
             self._subscribed.add(path)
-            cached = self._cache.get(path)
-        if cached is not None:
-            self._send(path, cached)
+            try:
+                cached = self._made(path)
+            except Exception:
+                self._cache.pop(path, None)
+                LOG.exception("could not make the last sample of %s for a new subscriber", path)
+                return
+            if cached is not None:  # queued under the lock: a newer publish cannot overtake it
+                self._send(path, cached)
 
     def _on_message(self, path: str, body: bytes) -> None:
         with self._lock:

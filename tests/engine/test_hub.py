@@ -44,3 +44,44 @@ def test_detaching_with_a_fresh_bound_method_detaches_and_the_last_one_unsubscri
     assert stream.handlers == [first.handle]
     hub.detach("/t", first.handle)
     assert "/t" not in hub.streams() and sim.callbacks["/t"] == []  # unsubscribed from the simulator
+
+
+class SlowUnsubscribeSim(FakeSim):
+    """A simulator whose unsubscribe service call is in flight until released, as over a slow link."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.in_flight, self.release = threading.Event(), threading.Event()
+        self.order: list[str] = []
+
+    def subscribe(self, topic: str, callback) -> None:
+        self.order.append("subscribe")
+        super().subscribe(topic, callback)
+
+    def unsubscribe(self, topic: str, callback) -> None:
+        self.in_flight.set()
+        assert self.release.wait(5)
+        self.order.append("unsubscribe")
+        super().unsubscribe(topic, callback)
+
+
+def test_an_attach_waits_for_an_unsubscribe_in_flight_so_the_server_sees_them_in_order() -> None:
+    """Subscribe (a topics frame) must not overtake unsubscribe (a service call) for the same topic:
+    the server would apply the unsubscribe last and the new bridge would never get a message."""
+    sim = SlowUnsubscribeSim()
+    hub = StreamHub(sim, lambda _tf: None)
+    image, info = Bridge(), Bridge()
+    hub.attach("/cam", image.handle)
+    leaving = threading.Thread(target=hub.detach, args=("/cam", image.handle))
+    leaving.start()
+    assert sim.in_flight.wait(5)
+    coming = threading.Thread(target=hub.attach, args=("/cam", info.handle))
+    coming.start()
+    coming.join(0.2)
+    assert coming.is_alive() and sim.order == ["subscribe"]  # held back while the unsubscribe is out
+    hub.attach("/other", image.handle)  # other topics are not held up
+    sim.release.set()
+    leaving.join(5)
+    coming.join(5)
+    assert sim.order == ["subscribe", "subscribe", "unsubscribe", "subscribe"]  # /cam, /other, /cam, /cam
+    assert hub.streams()["/cam"].handlers == [info.handle] and len(sim.callbacks["/cam"]) == 1

@@ -112,3 +112,28 @@ def test_paused_steps_publish_every_instrument_and_a_lidar_segment_per_physics_s
     assert all(len(scan["segmentation_cloud"]) <= 10 * 16 for scan in scans[1:])
     assert sum(len(s["segmentation_cloud"]) for s in scans) > 0
     world.resume()
+
+
+def test_a_subscription_after_a_paused_step_gets_that_steps_sample(client):
+    """Subscribe and step go on different sockets, so a subscription can reach the server after the step
+    it preceded: the sample it then gets is the step's own (sensors sample whether or not anyone
+    listens), never an older one."""
+    world: World = load_world(client, "scene_drone_sensors.jsonc")
+    world.pause()
+    now = world.continue_for_single_step(wait_until_complete=True)
+    sensors = f"{world.parent_topic}/robots/Drone1/sensors"
+    for topic in (
+        "IMU1/imu_kinematics",
+        "Airspeed/airspeed",
+        "Battery/battery",
+        "DistanceSensor/distance_sensor",
+    ):
+        first = subscribe(client, f"{sensors}/{topic}").wait_for(1, timeout=5.0)[0]
+        assert first["time_stamp"] == now, topic
+    # lidar1 reports at 10 Hz: its first sample is the newest report, a whole scan, made on subscription
+    scan = subscribe(client, f"{sensors}/lidar1/lidar").wait_for(1, timeout=5.0)[0]
+    assert now - LIDAR_PERIOD_NS - STEP_NS < scan["time_stamp"] <= now
+    assert len(scan["segmentation_cloud"]) > 100 and len(scan["point_cloud"]) == 3 * len(
+        scan["segmentation_cloud"]
+    )
+    world.resume()

@@ -219,6 +219,10 @@ class RecordingHub:
     def publish(self, path: str, message: dict) -> None:
         self.published.append((path, message))
 
+    def offer(self, path: str, make) -> bool:
+        self.publish(path, make())
+        return True
+
 
 def test_a_robots_instruments_publish_every_tick_from_one_snapshot_of_the_body(monkeypatch):
     from types import SimpleNamespace
