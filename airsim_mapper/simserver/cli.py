@@ -42,7 +42,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser.add_argument(
         "--render-in-process",
         action="store_true",
-        help="render cameras on the server's sensor thread instead of a child process",
+        help="render cameras on the server's camera thread instead of a child process",
     )
     parser.add_argument(
         "--renderer",

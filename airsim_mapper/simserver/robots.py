@@ -152,7 +152,7 @@ class RobotRuntime:
         self.parameters: dict[int, float] = {}
         start_ns = clock.now_ns()
         self.cameras: dict[str, CameraStream] = {}
-        self.heavy: list[LidarStream | RadarStream] = []
+        self.scanners: list[LidarStream | RadarStream] = []
         self.instruments: list[InstrumentStream] = []
         self.getters: dict[str, InstrumentStream] = {}
         for sensor in spec.sensors:
@@ -160,11 +160,11 @@ class RobotRuntime:
             if sensor.type == "camera":
                 self.cameras[sensor.id] = CameraStream(sensor, sensor_prefix, self.body, world, hub, render)
             elif sensor.type == "lidar":
-                self.heavy.append(
+                self.scanners.append(
                     LidarStream(sensor, sensor_prefix, self.body, world, hub, scene.clock.step_ns)
                 )
             elif sensor.type == "radar":
-                self.heavy.append(RadarStream(sensor, sensor_prefix, self.body, world, hub))
+                self.scanners.append(RadarStream(sensor, sensor_prefix, self.body, world, hub))
             else:
                 stream = InstrumentStream(
                     sensor, sensor_prefix, self.body, world, hub, scene.home_geo, start_ns
@@ -224,12 +224,17 @@ class RobotRuntime:
         if self.spec.multirotor:
             self.rotors.step(now_ns)
 
-    def step_heavy(self, now_ns: int, tick_ns: int) -> bool:
-        """Cameras and radars at `now_ns`; lidars scan up to the latest physics tick, `tick_ns`."""
+    def step_cameras(self, now_ns: int) -> bool:
+        """Cameras due at `now_ns`; True if any rendered."""
         worked = False
         for camera in self.cameras.values():
             worked = camera.step(now_ns) or worked
-        for stream in self.heavy:
+        return worked
+
+    def step_scans(self, now_ns: int, tick_ns: int) -> bool:
+        """Radars at `now_ns`; lidars scan up to the latest physics tick, `tick_ns`. True if any worked."""
+        worked = False
+        for stream in self.scanners:
             worked = stream.step(tick_ns if isinstance(stream, LidarStream) else now_ns) or worked
         return worked
 

@@ -1,11 +1,14 @@
-"""The headless server: sockets, the current scene, and the simulation and sensor threads."""
+"""The headless server: sockets, the current scene, and the simulation, camera and scan threads."""
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import operator
 import threading
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
@@ -21,6 +24,17 @@ DEFAULT_SCENE_PREFIX = "/Sim/SceneBasicDrone"
 NEVER_EXPIRES = 0xFFFFFFFFFFFFFFFF
 MIN_TICK_S, MAX_TICK_S = 0.001, 0.02  # bounds of the free-running physics tick period (wall seconds)
 SENSOR_IDLE_S = 0.005
+
+
+@dataclass(frozen=True)
+class SensorLane:
+    """A sensor thread: the session's step it runs, and the lock held around each step (a scene swap and a
+    lock-step step take it too). Cameras and scans have a lane each, so a slow render never holds back a
+    lidar or radar sample."""
+
+    name: str
+    step: Callable[[Session], bool]
+    lock: threading.Lock = field(default_factory=threading.Lock, compare=False)
 
 
 @dataclass(frozen=True)
@@ -59,9 +73,12 @@ class SimServer:
         self.hub = TopicHub(options.address, options.topics_port)
         self.services = ServiceServer(self.table, options.address, options.services_port, options.workers)
         self._scene_lock = threading.Lock()
-        # held by each loop around one step of the current session, and by a scene swap (both of them)
+        # held by each loop around one step of the current session, and by a scene swap (all of them)
         self._sim_step_lock = threading.Lock()
-        self._sensor_step_lock = threading.Lock()
+        self._lanes = (
+            SensorLane("cameras", operator.methodcaller("camera_tick")),
+            SensorLane("scans", operator.methodcaller("scan_tick")),
+        )
         self._stopping = threading.Event()
         self._default_trajectories = TrajectoryStore()
         self.session: Session | None = None
@@ -70,7 +87,10 @@ class SimServer:
         self._activate(self._session(default_scene()))
         self._threads = [
             threading.Thread(target=self._sim_loop, name="sim", daemon=True),
-            threading.Thread(target=self._sensor_loop, name="sensors", daemon=True),
+            *(
+                threading.Thread(target=self._sensor_loop, args=(lane,), name=lane.name, daemon=True)
+                for lane in self._lanes
+            ),
         ]
 
     # -- lifecycle
@@ -133,7 +153,9 @@ class SimServer:
         while), so that nothing the old scene publishes lands in the new table: a scene reloaded with the same
         id has the same topic paths, and an old frame would become the new scene's cached value.
         """
-        with self._sim_step_lock, self._sensor_step_lock:
+        with contextlib.ExitStack() as held:
+            for lock in (self._sim_step_lock, *(lane.lock for lane in self._lanes)):
+                held.enter_context(lock)
             old = self.session
             if old is not None:
                 old.stop()
@@ -217,22 +239,23 @@ class SimServer:
                     return
                 session.clock.begin_step()
                 session.tick(True)
-            with self._sensor_step_lock:
-                if self.session is session:
-                    session.sensor_tick()
+            for lane in self._lanes:
+                with lane.lock:
+                    if self.session is session:
+                        lane.step(session)
         except Exception:
             LOG.exception("lock-step tick failed")
         finally:
             session.clock.finish_step()
 
-    def _sensor_loop(self) -> None:
+    def _sensor_loop(self, lane: SensorLane) -> None:
         while not self._stopping.is_set():
             worked = False
             try:
-                with self._sensor_step_lock:
+                with lane.lock:
                     session = self.session
                     if session is not None:
-                        worked = session.sensor_tick()
+                        worked = lane.step(session)
             except RenderWorkerError as exc:  # the worker is replaced on the next capture
                 LOG.warning("sensor step failed: %s", exc)
                 self._stopping.wait(0.1)

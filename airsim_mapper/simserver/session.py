@@ -223,10 +223,12 @@ class Session:
         if publish_pose and self.env_actors.actors:
             self.env_actors.publish(self.hub, now)
 
-    def sensor_tick(self) -> bool:
-        """Sensor thread: render and scan what is due; True if anything was produced."""
+    def camera_tick(self) -> bool:
+        """Camera thread: render what is due; True if anything was rendered."""
+        now = self.clock.now_ns()
+        return any([robot.step_cameras(now) for robot in self.robots.values()])
+
+    def scan_tick(self) -> bool:
+        """Scan thread: lidar and radar samples that are due; True if anything was scanned."""
         now, tick = self.clock.now_ns(), self.last_tick_ns
-        worked = False
-        for robot in self.robots.values():
-            worked = robot.step_heavy(now, tick) or worked
-        return worked
+        return any([robot.step_scans(now, tick) for robot in self.robots.values()])

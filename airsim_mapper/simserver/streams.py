@@ -1,10 +1,11 @@
 """Sensor streams: when each sensor of a robot renders or measures, and where its messages go.
 
-Cameras, lidars and radars are heavy (ray casts) and run on the sensor thread; instruments (IMU, GPS, ...)
-and rotor info are cheap and run on the simulation thread. Heavy sensors work only while someone
-subscribes (or a GetImages call waits); instruments publish on every physics tick while subscribed (the
-distance sensor at its `report-frequency`, if given) and refresh their cached value about once a second
-otherwise, so a new subscriber always gets a recent value.
+Cameras render on the camera thread (through the render worker, which a busy machine slows first), lidars
+and radars scan on the scan thread, so a slow render never holds a scan back; instruments (IMU, GPS, ...)
+and rotor info are cheap and run on the simulation thread. Cameras render only while someone subscribes
+(or a GetImages call waits). The other sensors sample on their schedule whether or not anyone listens, as
+the real ones do: an unheard sample is offered to the topic hub, made only if a subscriber comes before
+the next one, so a new subscriber always gets the latest sample.
 The sensor modules (camera, lidar, radar, instruments) are pure numpy; this module only schedules them.
 """
 
@@ -266,7 +267,7 @@ class LidarStream:
     previous report, stamped and posed at report time: on every tick, or at `report-frequency` (ReportTimer).
 
     `step` takes the time of the latest physics tick; in lock-step that is the step just simulated, free
-    running the sensor thread may see several ticks at once and scans them as one segment. Scans only
+    running the scan thread may see several ticks at once and scans them as one segment. Scans only
     while subscribed; unheard reports are offered (scanned if a subscriber comes before the next one).
     """
 
