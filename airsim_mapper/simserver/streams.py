@@ -334,7 +334,7 @@ class LidarStream:
 
 
 class RadarStream:
-    """A radar: detections every detection-interval, tracks every track-interval (while subscribed)."""
+    """A radar: detections every detection-interval, tracks every track-interval (offered while unheard)."""
 
     def __init__(self, sensor: SensorSpec, prefix: str, body: Body, world: World, hub: TopicHub) -> None:
         self.detections_path = f"{prefix}/radar_detections"
