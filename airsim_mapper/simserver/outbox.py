@@ -36,6 +36,7 @@ class Outbox:
         self._small: deque[tuple[str, bytes]] = deque()
         self._large: OrderedDict[str, bytes] = OrderedDict()
         self._closed = False
+        self._sending = False  # the sender thread holds a frame it took
         self.dropped = 0
         self._warned_at = 0.0
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
@@ -56,11 +57,22 @@ class Outbox:
                     dropped_path, _ = self._small.popleft()
                     self._drop(f"the client is not reading; dropped the oldest frame of {dropped_path}")
                 self._small.append((path, frame))
-            self._cond.notify()
+            self._cond.notify_all()
 
     def pending(self) -> int:
         with self._cond:
             return len(self._small) + len(self._large)
+
+    def flush(self, timeout: float) -> bool:
+        """Wait until every queued frame has been sent (or given up on); False on timeout."""
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while self._small or self._large or self._sending:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0 or self._closed:
+                    return False
+                self._cond.wait(remaining)
+        return True
 
     def close(self, timeout: float = 2.0) -> None:
         """Stop the sender thread; frames still waiting are discarded."""
@@ -68,7 +80,7 @@ class Outbox:
             self._closed = True
             self._small.clear()
             self._large.clear()
-            self._cond.notify()
+            self._cond.notify_all()
         if threading.current_thread() is not self._thread:
             self._thread.join(timeout=timeout)
 
@@ -88,7 +100,12 @@ class Outbox:
                 if self._closed:
                     return
                 path, frame = self._small.popleft() if self._small else self._large.popitem(last=False)
+                self._sending = True
             try:
                 self._send(path, frame)
             except Exception:  # the sender thread must outlive any one bad send
                 LOG.exception("sending a frame on %s failed", path)
+            finally:
+                with self._cond:
+                    self._sending = False
+                    self._cond.notify_all()

@@ -24,6 +24,7 @@ DEFAULT_SCENE_PREFIX = "/Sim/SceneBasicDrone"
 NEVER_EXPIRES = 0xFFFFFFFFFFFFFFFF
 MIN_TICK_S, MAX_TICK_S = 0.001, 0.02  # bounds of the free-running physics tick period (wall seconds)
 SENSOR_IDLE_S = 0.005
+LOCK_STEP_FLUSH_S = 5.0  # at most this long for a step's frames to leave (each send gives up after 250 ms)
 
 
 @dataclass(frozen=True)
@@ -243,6 +244,9 @@ class SimServer:
                 with lane.lock:
                     if self.session is session:
                         lane.step(session)
+            # the step's frames go out before its reply: queued, the next step's image would replace an
+            # unsent one (the outbox keeps the newest large frame per topic) while the client was slow
+            self.hub.flush(LOCK_STEP_FLUSH_S)
         except Exception:
             LOG.exception("lock-step tick failed")
         finally:

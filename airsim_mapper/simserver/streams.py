@@ -42,6 +42,9 @@ from airsim_mapper.simserver.world import World
 LOG = logging.getLogger("airsim_mapper.simserver.streams")
 
 GET_IMAGES_TIMEOUT_S = 5.0
+# Between reports a lidar scans segments of at least this much sim time: one per 3 ms tick cost the server
+# about a tenth of a core in numpy call overhead, and the report carries the same points either way.
+LIDAR_MIN_SEGMENT_NS = 20_000_000
 Render = Callable[..., dict[int, camera.RenderedImage]]  # camera.render's arguments after the world
 
 
@@ -89,13 +92,20 @@ class ReportTimer:
         self.last_ns: int | None = None  # the (set back) time of the last report
         self.reported_ns: int | None = None  # when it actually was
 
+    def is_due(self, now_ns: int) -> bool:
+        """Whether a report is due at `now_ns` (without taking it)."""
+        if self.last_ns is None or self.reported_ns is None:
+            return True
+        return now_ns > self.reported_ns and now_ns - self.last_ns >= self.period_ns
+
     def due(self, now_ns: int) -> bool:
+        """Whether a report is due at `now_ns`; if so, it is taken."""
+        if not self.is_due(now_ns):
+            return False
         if self.last_ns is None or self.reported_ns is None:
             self.last_ns = self.reported_ns = now_ns
             return True
         elapsed = now_ns - self.last_ns
-        if now_ns <= self.reported_ns or elapsed < self.period_ns:
-            return False
         self.last_ns = now_ns - min(elapsed - self.period_ns, 2 * self.period_ns)
         self.reported_ns = now_ns
         return True
@@ -267,7 +277,8 @@ class LidarStream:
     previous report, stamped and posed at report time: on every tick, or at `report-frequency` (ReportTimer).
 
     `step` takes the time of the latest physics tick; in lock-step that is the step just simulated, free
-    running the scan thread may see several ticks at once and scans them as one segment. Scans only
+    running the scan thread may see several ticks at once and scans them as one segment. Between reports,
+    segments span at least LIDAR_MIN_SEGMENT_NS (each scanned from the pose at its end). Scans only
     while subscribed; unheard reports are offered (scanned if a subscriber comes before the next one).
     """
 
@@ -309,6 +320,12 @@ class LidarStream:
                 scan = functools.partial(self.model.scan, self.world, position, orientation, start, tick_ns)
                 self.hub.offer(self.path, lambda: self.report(tick_ns, [scan()], position, orientation))
             return False
+        if (
+            self.scanned_ns is not None
+            and tick_ns - self.scanned_ns < LIDAR_MIN_SEGMENT_NS
+            and not self.timer.is_due(tick_ns)
+        ):
+            return False  # the next segment, or the report, covers this tick too
         start = self.scanned_ns
         if start is None:
             reported = self.timer.reported_ns

@@ -149,6 +149,10 @@ class TopicHub:
                 return False
         return self.publish(path, make())
 
+    def flush(self, timeout: float) -> bool:
+        """Wait until every published frame is on the socket (or dropped by its send timeout)."""
+        return self._outbox.flush(timeout)
+
     def unsubscribe(self, paths: Iterable[str]) -> bool:
         """The `/Sim/Unsubscribe` service: false if any path is not a registered topic."""
         all_known = True

@@ -10,6 +10,7 @@ from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
 from airsim_mapper.simserver.lidar import LidarError, LidarModel
+from airsim_mapper.simserver.streams import LIDAR_MIN_SEGMENT_NS
 from airsim_mapper.simserver.world import World, load_world
 
 LEVEL = np.array([1.0, 0.0, 0.0, 0.0])
@@ -251,8 +252,15 @@ def test_with_report_frequency_a_report_carries_every_segment_since_the_last(wor
     every, every_hub = lidar_stream(world, {k: v for k, v in lidar_config.items() if k != "report-frequency"})
     batched, batched_hub = lidar_stream(world, {**lidar_config, "report-frequency": 10})
     scans: list[dict] = []
+    spans: list[tuple[int, int]] = []  # (start, end) of each scanned segment
     real_scan = batched.model.scan
-    batched.model.scan = lambda *args: scans.append(real_scan(*args)) or scans[-1]
+
+    def scan(*args):
+        spans.append((args[3], args[4]))
+        scans.append(real_scan(*args))
+        return scans[-1]
+
+    batched.model.scan = scan
     for k in range(1, 70):
         every.step(k * 3_000_000)
         batched.step(k * 3_000_000)
@@ -261,10 +269,17 @@ def test_with_report_frequency_a_report_carries_every_segment_since_the_last(wor
     first, *later = [assert_consistent(m) for m in batched_hub.published]
     # the first report after subscribing covers a whole report period, as if it had been scanning before
     assert first > 20 * assert_consistent(every_hub.published[0])
-    # the second holds the 34 ticks' segments after the first report, joined in order
-    assert len(scans) == 69  # one per tick
+    # between reports the segments are contiguous and span at least LIDAR_MIN_SEGMENT_NS, but the one a
+    # report closes; the second report holds the segments after the first report, joined in order
+    assert all(a[1] == b[0] for a, b in zip(spans, spans[1:]))
+    closing = {i for i, (_, end) in enumerate(spans) if end in stamps}
+    assert all(
+        end - start >= LIDAR_MIN_SEGMENT_NS for i, (start, end) in enumerate(spans) if i not in closing
+    )
+    second = [i for i, (start, end) in enumerate(spans) if stamps[0] <= start and end <= stamps[1]]
+    assert 5 <= len(second) <= 34 // 7 + 1  # 102 ms in segments of 7 ticks and the closing one
     assert np.array_equal(
-        batched_hub.published[1]["point_cloud"], np.concatenate([s["point_cloud"] for s in scans[1:35]])
+        batched_hub.published[1]["point_cloud"], np.concatenate([scans[i]["point_cloud"] for i in second])
     )
     between = [assert_consistent(m) for m in every_hub.published if stamps[0] < m["time_stamp"] <= stamps[-1]]
     assert sum(later) == pytest.approx(sum(between), rel=0.01)  # the same sweep, batched

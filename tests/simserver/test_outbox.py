@@ -126,3 +126,20 @@ def test_close_discards_waiting_frames_and_ignores_later_ones(stuck) -> None:
     box.put("/pose", b"2")
     assert box.pending() == 0
     assert sink.sent == [("/first", b"0")]
+
+
+def test_flush_waits_until_the_frame_being_sent_and_every_queued_one_are_out():
+    """A lock-step step flushes before it replies: its image must not wait where the next one replaces it."""
+    sink = GatedSink()
+    box = Outbox(sink)
+    try:
+        box.put("/img", BIG)
+        assert sink.entered.wait(5)  # the sender holds the first image
+        box.put("/img", BIG + b"2")
+        assert box.flush(0.2) is False  # still sending: a flush gives up at its timeout
+        sink.gate.set()
+        assert box.flush(5.0) is True
+        assert [frame for _, frame in sink.sent] == [BIG, BIG + b"2"] and box.pending() == 0
+    finally:
+        sink.gate.set()
+        box.close()
