@@ -298,6 +298,7 @@ class LidarStream:
         self.model = lidar.LidarModel.from_config(dict(sensor.config))
         self.step_ns = max(1, int(step_ns))
         self.timer = ReportTimer(report_frequency(sensor))
+        self.report_span_ns = max(self.step_ns, self.timer.period_ns)  # the sim time one report covers
         self.last_tick_ns: int | None = None  # the latest tick seen
         self.scanned_ns: int | None = None  # the tick scanned last (None while nobody listens)
         self.pending: list[dict[str, np.ndarray]] = []
@@ -307,16 +308,14 @@ class LidarStream:
         if self.last_tick_ns is not None and tick_ns <= self.last_tick_ns:
             return False
         self.last_tick_ns = tick_ns
-        position, orientation = mount_pose(
-            self.body.snapshot(), self.sensor.position, self.sensor.orientation
-        )
         if not self.hub.is_subscribed(self.path):
             # the real lidar scans whether or not anyone listens: a due report is offered, scanned only if a
             # subscription arrives before the next one, and a new subscriber's first report covers the
             # time since the last report, as if this one had been scanning too
             self.scanned_ns, self.pending = None, []
             if self.timer.due(tick_ns):
-                start = tick_ns - max(self.step_ns, self.timer.period_ns)
+                position, orientation = self.world_pose()
+                start = tick_ns - self.report_span_ns
                 scan = functools.partial(self.model.scan, self.world, position, orientation, start, tick_ns)
                 self.hub.offer(self.path, lambda: self.report(tick_ns, [scan()], position, orientation))
             return False
@@ -326,16 +325,21 @@ class LidarStream:
             and not self.timer.is_due(tick_ns)
         ):
             return False  # the next segment, or the report, covers this tick too
+        position, orientation = self.world_pose()
         start = self.scanned_ns
         if start is None:
             reported = self.timer.reported_ns
-            start = reported if reported is not None else tick_ns - max(self.step_ns, self.timer.period_ns)
+            start = reported if reported is not None else tick_ns - self.report_span_ns
         self.scanned_ns = tick_ns
         self.pending.append(self.model.scan(self.world, position, orientation, start, tick_ns))
         if self.timer.due(tick_ns):
             self.hub.publish(self.path, self.report(tick_ns, self.pending, position, orientation))
             self.pending = []
         return True
+
+    def world_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The lidar's world pose now, from the robot's."""
+        return mount_pose(self.body.snapshot(), self.sensor.position, self.sensor.orientation)
 
     @classmethod
     def report(
@@ -363,18 +367,21 @@ class RadarStream:
 
     def step(self, now_ns: int) -> bool:
         """Detections and tracks when due, offered (made only if someone listens); True if any was made."""
+        detect, track = self.detect_schedule.due(now_ns), self.track_schedule.due(now_ns)
+        if not (detect or track):
+            return False
         kin = self.body.snapshot()
         position, orientation = mount_pose(kin, self.sensor.position, self.sensor.orientation)
         velocity, pose = kin.linear_velocity, messages.pose(position, orientation)
         worked = False
-        if self.detect_schedule.due(now_ns):
+        if detect:
 
             def detections() -> dict[str, Any]:
                 found = self.model.detect(self.world, position, orientation, velocity, now_ns)
                 return {"time_stamp": int(now_ns), "radar_detections": found, "pose": pose}
 
             worked = self.hub.offer(self.detections_path, detections)
-        if self.track_schedule.due(now_ns):
+        if track:
 
             def tracks() -> dict[str, Any]:
                 found = self.model.track(self.world, position, orientation, velocity, now_ns)
