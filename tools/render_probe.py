@@ -22,7 +22,8 @@ import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
 from airsim_mapper.simserver import camera, gl_renderer
-from airsim_mapper.simserver.world import World, load_world
+from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.world_file import load_world
 from tools.bench.renderers import POSES
 
 WIDTH, HEIGHT, FOV = 1280, 720, 90.0

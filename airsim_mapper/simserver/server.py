@@ -16,7 +16,7 @@ from airsim_mapper.simserver.scene import SceneError, SceneSpec, default_scene, 
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
 from airsim_mapper.simserver.session import TRAJECTORY_KEYS, Session, TrajectoryStore
 from airsim_mapper.simserver.topics import TopicHub
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 
 LOG = logging.getLogger("airsim_mapper.simserver")
 

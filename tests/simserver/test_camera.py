@@ -17,7 +17,8 @@ from airsim_mapper.simserver.camera import (
     segmentation_color,
     segmentation_palette,
 )
-from airsim_mapper.simserver.world import World, load_world
+from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.world_file import load_world
 
 LEVEL_NORTH = quat_from_rpy(0.0, 0.0, 0.0)
 # the robot configs with a DownCamera capturing all seven image types

@@ -22,7 +22,7 @@ from airsim_mapper.simserver.instruments import (
     imu_message,
     magnetometer_message,
 )
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 
 HOME = (47.641468, -122.140165, 122.0)  # the scenes' home-geo-point
 # robot configs carrying every instrument

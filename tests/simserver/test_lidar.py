@@ -11,7 +11,8 @@ from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
 from airsim_mapper.simserver.lidar import LidarError, LidarModel
 from airsim_mapper.simserver.streams import LIDAR_MIN_SEGMENT_NS
-from airsim_mapper.simserver.world import World, load_world
+from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.world_file import load_world
 
 LEVEL = np.array([1.0, 0.0, 0.0, 0.0])
 TENTH_S = 100_000_000

@@ -19,7 +19,7 @@ from airsim_mapper.simserver.render_worker import (
     RenderWorkerError,
     set_autogroup_nice,
 )
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 from simserver.clientkit import load_world as load_scene
 
 pytestmark = pytest.mark.live  # the render worker is a child process

@@ -24,7 +24,7 @@ import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver import camera, gl_renderer
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 
 CASES = {  # name: (width, height, image types)
     "scene 1280x720": (1280, 720, (camera.SCENE,)),

@@ -27,7 +27,7 @@ import numpy as np
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver.camera import render
 from airsim_mapper.simserver.lidar import LidarModel
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 
 WIDTH, HEIGHT, FOV = 640, 480, 90.0
 TYPE_NAMES = (
