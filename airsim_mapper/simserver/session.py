@@ -11,6 +11,7 @@ import numpy as np
 from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
+from airsim_mapper.simserver.robot_services import robot_methods
 from airsim_mapper.simserver.robots import RobotRuntime
 from airsim_mapper.simserver.scene import EARTH_RADIUS_M, SceneSpec, topic_table
 from airsim_mapper.simserver.services import Method, ServiceError
@@ -168,7 +169,7 @@ class Session:
         ]
         table += self.visuals.methods(p)
         for robot in self.robots.values():
-            table += robot.methods()
+            table += robot_methods(robot)
         return table
 
     def _set_wind(self, wind: list[float]) -> None:
