@@ -6,8 +6,7 @@ import math
 from typing import Any
 
 from airsim_mapper.geometry import quat_from_rpy, quat_multiply
-from airsim_mapper.simserver import camera as camera_model
-from airsim_mapper.simserver import messages
+from airsim_mapper.simserver import camera_model, messages
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.robot_params import finite, within_world
 from airsim_mapper.simserver.robots import RobotRuntime

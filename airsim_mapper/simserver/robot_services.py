@@ -18,9 +18,9 @@ from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion_services import MotionServices
 from airsim_mapper.simserver.robot_params import (
     YAW_RATE_LIMIT,
+    check_speed,
     finite,
     parameter_error,
-    check_speed,
     within_world,
 )
 from airsim_mapper.simserver.robots import RobotRuntime

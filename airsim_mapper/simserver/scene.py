@@ -20,7 +20,7 @@ import numpy as np
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
-from airsim_mapper.simserver.camera import DEFAULT_MAX_DEPTH_VIS
+from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 

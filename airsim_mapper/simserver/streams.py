@@ -24,15 +24,17 @@ import numpy as np
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
 from airsim_mapper.simserver import (
     annotations,
-    camera,
+    camera_model,
     image_encoding,
     instruments,
     lidar,
     messages,
     protocol,
     radar,
+    rendering,
 )
 from airsim_mapper.simserver.battery import BatteryState
+from airsim_mapper.simserver.camera_model import RenderedImage, RenderRequest
 from airsim_mapper.simserver.motion import Body, Kinematic
 from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
 from airsim_mapper.simserver.services import ServiceError
@@ -45,7 +47,7 @@ GET_IMAGES_TIMEOUT_S = 5.0
 # Between reports a lidar scans segments of at least this much sim time: one per 3 ms tick cost the server
 # about a tenth of a core in numpy call overhead, and the report carries the same points either way.
 LIDAR_MIN_SEGMENT_NS = 20_000_000
-Render = Callable[..., dict[int, camera.RenderedImage]]  # camera.render's arguments after the world
+Render = Callable[[RenderRequest], dict[int, RenderedImage]]  # rendering.render of one world
 
 
 def mount_pose(
@@ -120,8 +122,7 @@ def report_frequency(sensor: SensorSpec) -> float | None:
 class CameraStream:
     """One camera: renders the capture-enabled types that are subscribed or requested by GetImages.
 
-    `render` has the signature of `camera.render` without the world (a RenderWorker's, in the server);
-    None renders in this process.
+    `render` draws a RenderRequest (a RenderWorker's, in the server); None renders in this process.
     """
 
     def __init__(
@@ -138,7 +139,7 @@ class CameraStream:
         self.body = body
         self.world = world
         self.hub = hub
-        self.render: Render = render or functools.partial(camera.render, world)
+        self.render: Render = render or functools.partial(rendering.render, world)
         self.captures = {c.image_type: c for c in sensor.enabled_captures()}
         for image_type, capture in self.captures.items():
             problem = image_encoding.unsupported_combination(
@@ -164,7 +165,7 @@ class CameraStream:
     def publish_infos(self) -> None:
         """CameraInfo once at scene start (cached; type 5 lands on its image topic, the real quirk)."""
         for image_type, capture in self.captures.items():
-            info = camera.camera_info_message(capture.width, capture.height, capture.fov_deg)
+            info = camera_model.camera_info_message(capture.width, capture.height, capture.fov_deg)
             self.hub.publish(info_topic_path(self.prefix, image_type), info)
 
     def set_pose(self, position: np.ndarray, orientation: np.ndarray) -> None:
@@ -207,9 +208,9 @@ class CameraStream:
         latest: dict[int, dict[str, Any]] = {}
         boxes = self.annotations(position, orientation)
         for (width, height, fov), types in groups.items():
-            vis = self.captures.get(camera.DEPTH_VIS)
-            max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
-            rendered = self.render(position, orientation, width, height, fov, types, max_depth)
+            vis = self.captures.get(camera_model.DEPTH_VIS)
+            max_depth = vis.max_depth_m if vis else camera_model.DEFAULT_MAX_DEPTH_VIS
+            rendered = self.render(RenderRequest(position, orientation, width, height, fov, types, max_depth))
             for image_type, img in rendered.items():
                 setting = self.captures[image_type]
                 wire = image_encoding.wire_image(
@@ -238,9 +239,9 @@ class CameraStream:
         settings = self.sensor.annotation
         if settings is None:
             return []
-        scene = next((c for c in self.sensor.captures if c.image_type == camera.SCENE), None)
+        scene = next((c for c in self.sensor.captures if c.image_type == camera_model.SCENE), None)
         width, height = (scene.width, scene.height) if scene else annotations.DEFAULT_SIZE
-        fov = self.fov.get(camera.SCENE, scene.fov_deg if scene else annotations.DEFAULT_FOV_DEG)
+        fov = self.fov.get(camera_model.SCENE, scene.fov_deg if scene else annotations.DEFAULT_FOV_DEG)
         return annotations.annotate(self.world, settings, position, orientation, width, height, fov)
 
     def get_images(self, image_types: list[int], now_ns: Callable[[], int]) -> dict[str, Any]:
