@@ -10,8 +10,8 @@ from airsim_mapper.simserver import camera_model, messages
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.robot_params import finite, within_world
 from airsim_mapper.simserver.robots import RobotRuntime
+from airsim_mapper.simserver.sensor_streams import CameraStream
 from airsim_mapper.simserver.services import Method, ServiceError
-from airsim_mapper.simserver.streams import CameraStream
 
 
 class CameraServices:

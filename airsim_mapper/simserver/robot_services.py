@@ -24,9 +24,9 @@ from airsim_mapper.simserver.robot_params import (
     within_world,
 )
 from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.scene import ned_to_geo
+from airsim_mapper.simserver.scene_spec import ned_to_geo
+from airsim_mapper.simserver.sensor_streams import InstrumentStream
 from airsim_mapper.simserver.services import Method, ServiceError
-from airsim_mapper.simserver.streams import InstrumentStream
 
 
 def robot_methods(robot: RobotRuntime) -> list[Method]:

@@ -14,15 +14,13 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.simserver import messages
-from airsim_mapper.simserver.clock import SimClock
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import (
     Body,
 )
 from airsim_mapper.simserver.robot_params import within_world
-from airsim_mapper.simserver.scene import RobotSpec, SceneSpec
-from airsim_mapper.simserver.services import ServiceError
-from airsim_mapper.simserver.streams import (
+from airsim_mapper.simserver.scene_spec import RobotSpec, SceneSpec
+from airsim_mapper.simserver.sensor_streams import (
     CameraStream,
     InstrumentStream,
     LidarStream,
@@ -31,6 +29,8 @@ from airsim_mapper.simserver.streams import (
     RotorStream,
     ground_truth,
 )
+from airsim_mapper.simserver.services import ServiceError
+from airsim_mapper.simserver.sim_clock import SimClock
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 

@@ -9,7 +9,7 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.radar import RadarError, RadarModel
+from airsim_mapper.simserver.radar_model import RadarError, RadarModel
 from airsim_mapper.simserver.world import World
 from airsim_mapper.simserver.world_file import load_world
 

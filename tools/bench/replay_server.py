@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver import camera_model, lidar, rendering
+from airsim_mapper.simserver import camera_model, lidar_model, rendering
 from airsim_mapper.simserver.camera_model import RenderRequest
 from airsim_mapper.simserver.cli import main as server_main
 
@@ -70,7 +70,9 @@ def cached_scan(real_scan: Any) -> Any:
     many as the call's time span sweeps (a physics tick's segment, or several), cycling through it."""
     cache: dict[int, tuple[dict[str, Any], list[int]]] = {}
 
-    def scan(self: lidar.LidarModel, world: Any, position: Any, orientation: Any, start_ns: int, end_ns: int):
+    def scan(
+        self: lidar_model.LidarModel, world: Any, position: Any, orientation: Any, start_ns: int, end_ns: int
+    ):
         if id(self) not in cache:
             period = int(1e9 / self.rotation_hz)
             cache[id(self)] = (real_scan(self, world, position, orientation, end_ns - period, end_ns), [0])
@@ -90,7 +92,7 @@ def cached_scan(real_scan: Any) -> Any:
 
 def install_replay() -> None:
     rendering.render = cached_render(rendering.render)
-    lidar.LidarModel.scan = cached_scan(lidar.LidarModel.scan)
+    lidar_model.LidarModel.scan = cached_scan(lidar_model.LidarModel.scan)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -26,7 +26,7 @@ import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.lidar import LidarModel
+from airsim_mapper.simserver.lidar_model import LidarModel
 from airsim_mapper.simserver.rendering import render
 from airsim_mapper.simserver.world_file import load_world
 

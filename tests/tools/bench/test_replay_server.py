@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from airsim_mapper.simserver import camera_model, lidar, rendering
+from airsim_mapper.simserver import camera_model, lidar_model, rendering
 from airsim_mapper.simserver.camera_model import RenderRequest
 from tools.bench import replay_server
 
@@ -12,7 +12,7 @@ def test_the_replay_server_renders_in_its_own_process_with_the_cache(monkeypatch
     monkeypatch.setattr(replay_server, "server_main", lambda argv: seen.append(list(argv)) or 0)
     # install_replay's patches, undone after the test
     monkeypatch.setattr(rendering, "render", rendering.render)
-    monkeypatch.setattr(lidar.LidarModel, "scan", lidar.LidarModel.scan)
+    monkeypatch.setattr(lidar_model.LidarModel, "scan", lidar_model.LidarModel.scan)
     assert replay_server.main(["--topicsport", "1"]) == 0
     # a render worker is a child process without the cache: 1080p would be ray cast for real (8 Hz)
     assert seen == [["--topicsport", "1", "--render-in-process"]]

@@ -6,7 +6,8 @@ and rotor info are cheap and run on the simulation thread. Cameras render only w
 (or a GetImages call waits). The other sensors sample on their schedule whether or not anyone listens, as
 the real ones do: an unheard sample is offered to the topic hub, made only if a subscriber comes before
 the next one, so a new subscriber always gets the latest sample.
-The sensor modules (camera, lidar, radar, instruments) are pure numpy; this module only schedules them.
+The sensor models (`camera_model` and the renderers, `lidar_model`, `radar_model`, `instrument_models`)
+are pure numpy (or OpenGL); this module only schedules them.
 """
 
 from __future__ import annotations
@@ -26,22 +27,22 @@ from airsim_mapper.simserver import (
     annotations,
     camera_model,
     image_encoding,
-    instruments,
-    lidar,
+    instrument_models,
+    lidar_model,
     messages,
     protocol,
-    radar,
+    radar_model,
     rendering,
 )
 from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.camera_model import RenderedImage, RenderRequest
 from airsim_mapper.simserver.motion import Body, Kinematic
-from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
+from airsim_mapper.simserver.scene_spec import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
 from airsim_mapper.simserver.services import ServiceError
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 
-LOG = logging.getLogger("airsim_mapper.simserver.streams")
+LOG = logging.getLogger("airsim_mapper.simserver.sensor_streams")
 
 GET_IMAGES_TIMEOUT_S = 5.0
 # Between reports a lidar scans segments of at least this much sim time: one per 3 ms tick cost the server
@@ -296,7 +297,7 @@ class LidarStream:
     ) -> None:
         self.path = f"{prefix}/lidar"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
-        self.model = lidar.LidarModel.from_config(dict(sensor.config))
+        self.model = lidar_model.LidarModel.from_config(dict(sensor.config))
         self.step_ns = max(1, int(step_ns))
         self.timer = ReportTimer(report_frequency(sensor))
         self.report_span_ns = max(self.step_ns, self.timer.period_ns)  # the sim time one report covers
@@ -362,7 +363,7 @@ class RadarStream:
         self.detections_path = f"{prefix}/radar_detections"
         self.tracks_path = f"{prefix}/radar_tracks"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
-        self.model = radar.RadarModel.from_config(dict(sensor.config))
+        self.model = radar_model.RadarModel.from_config(dict(sensor.config))
         self.detect_schedule = Schedule(int(float(sensor.config.get("detection-interval", 0.1)) * 1e9))
         self.track_schedule = Schedule(int(float(sensor.config.get("track-interval", 0.2)) * 1e9))
 
@@ -392,9 +393,9 @@ class RadarStream:
         return worked
 
 
-def ground_truth(body: Body) -> instruments.Kinematics:
+def ground_truth(body: Body) -> instrument_models.Kinematics:
     """The body's state now, as the instrument models take it."""
-    return instruments.Kinematics(**vars(body.snapshot()))
+    return instrument_models.Kinematics(**vars(body.snapshot()))
 
 
 class InstrumentStream:
@@ -429,28 +430,28 @@ class InstrumentStream:
         self.timer = ReportTimer(report_frequency(sensor) if sensor.type == "distance-sensor" else None)
         self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 
-    def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
+    def message(self, now_ns: int, kin: instrument_models.Kinematics | None = None) -> dict[str, Any]:
         """This instrument's message at `now_ns`, from `kin` (read from the body if not given)."""
         kin = kin if kin is not None else ground_truth(self.body)
         cfg = self.config
         kind = self.sensor.type
         if kind == "imu":
-            return instruments.imu_message(kin, cfg, now_ns)
+            return instrument_models.imu_message(kin, cfg, now_ns)
         if kind == "gps":
-            return instruments.gps_message(kin, self.home_geo, cfg, now_ns)
+            return instrument_models.gps_message(kin, self.home_geo, cfg, now_ns)
         if kind == "barometer":
-            return instruments.barometer_message(kin, self.home_geo, cfg, now_ns)
+            return instrument_models.barometer_message(kin, self.home_geo, cfg, now_ns)
         if kind == "magnetometer":
-            return instruments.magnetometer_message(kin, cfg, now_ns)
+            return instrument_models.magnetometer_message(kin, cfg, now_ns)
         if kind == "distance-sensor":
-            return instruments.distance_message(self.world, kin, cfg, now_ns)
+            return instrument_models.distance_message(self.world, kin, cfg, now_ns)
         if self.battery is not None:
             return self.battery.message(now_ns)
-        return instruments.airspeed_message(kin, cfg, now_ns)
+        return instrument_models.airspeed_message(kin, cfg, now_ns)
 
-    def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
+    def step(self, now_ns: int, state: Callable[[], instrument_models.Kinematics] | None = None) -> None:
         """Publish if due (offered: made only if someone listens); `state` gives the tick's ground truth,
-        shared by a robot's instruments."""
+        shared by a robot's instrument_models."""
         if self.timer.due(now_ns):
             kin = state() if state is not None else ground_truth(self.body)
             self.hub.offer(self.path, functools.partial(self.message, now_ns, kin))
