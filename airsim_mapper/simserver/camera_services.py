@@ -7,10 +7,10 @@ from typing import Any
 
 from airsim_mapper.geometry import quat_from_rpy, quat_multiply
 from airsim_mapper.simserver import camera_model, messages
+from airsim_mapper.simserver.camera_stream import CameraStream
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.robot_params import finite, within_world
 from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.sensor_streams import CameraStream
 from airsim_mapper.simserver.services import Method, ServiceError
 
 

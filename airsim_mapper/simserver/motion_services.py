@@ -12,15 +12,14 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver.motion import (
+from airsim_mapper.simserver.motion import Command, Hold
+from airsim_mapper.simserver.motion_commands import (
     APPROX_ZERO_VEL,
     FORWARD_ONLY,
     TAKEOFF_HEIGHT_M,
     TAKEOFF_SPEED,
-    Command,
     Drive,
     Heading,
-    Hold,
     Land,
     Path,
     Rotate,

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver.motion import YawMode
+from airsim_mapper.simserver.motion_commands import YawMode
 from airsim_mapper.simserver.services import ServiceError
 
 SPEED_LIMIT_MPS = 1e5

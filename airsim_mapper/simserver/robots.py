@@ -14,18 +14,15 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.simserver import messages
+from airsim_mapper.simserver.camera_stream import CameraStream, Render
 from airsim_mapper.simserver.messages import MessageError
-from airsim_mapper.simserver.motion import (
-    Body,
-)
+from airsim_mapper.simserver.motion import Body
 from airsim_mapper.simserver.robot_params import within_world
 from airsim_mapper.simserver.scene_spec import RobotSpec, SceneSpec
 from airsim_mapper.simserver.sensor_streams import (
-    CameraStream,
     InstrumentStream,
     LidarStream,
     RadarStream,
-    Render,
     RotorStream,
     ground_truth,
 )
@@ -35,25 +32,10 @@ from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver")
-SPEED_LIMIT_MPS = 1e5
-YAW_RATE_LIMIT = 1e4  # rad/s
-POSITION_LIMIT_M = 1e8  # |x|, |y|, |z| of any position, commanded or reached
 COLLISION_RADIUS_M = 0.4
 COLLISION_REPEAT_NS = 100_000_000
 MAX_EVENTS = 1000  # collisions kept for the next Step call
 GROUND_PROBE_M = 0.1  # ground rays start this far above the body, so a body resting on a surface sees it
-MOVE_PARAMS = ("duration", "drivetrain", "yaw_is_rate", "yaw")
-HEADING_PARAMS = ("heading", "speed", "duration", "heading_margin", "yaw_rate", "timeout_sec")
-ROVER_PATH_PARAMS = ("velocity", "timeout_sec", "yaw_rate_max", "lookahead", "adaptive_lookahead")
-PATH_PARAMS = (
-    "velocity",
-    "timeout_sec",
-    "drivetrain",
-    "yaw_is_rate",
-    "yaw",
-    "lookahead",
-    "adaptive_lookahead",
-)
 
 
 class RobotRuntime:

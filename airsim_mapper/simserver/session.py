@@ -9,11 +9,11 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.simserver import messages
+from airsim_mapper.simserver.camera_stream import Render
 from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
 from airsim_mapper.simserver.robot_services import robot_methods
 from airsim_mapper.simserver.robots import RobotRuntime
 from airsim_mapper.simserver.scene_spec import EARTH_RADIUS_M, SceneSpec, topic_table
-from airsim_mapper.simserver.sensor_streams import Render
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.sim_clock import SimClock
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo

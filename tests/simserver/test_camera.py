@@ -213,9 +213,9 @@ class PublishedImages:
 
 
 def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(world):
+    from airsim_mapper.simserver.camera_stream import CameraStream
     from airsim_mapper.simserver.motion import Body
     from airsim_mapper.simserver.scene_spec import CaptureSetting, SensorSpec
-    from airsim_mapper.simserver.sensor_streams import CameraStream
 
     captures = (
         CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),
