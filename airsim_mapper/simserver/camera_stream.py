@@ -74,10 +74,16 @@ class CameraStream:
         return f"{self.prefix}/{IMAGE_TYPE_NAMES[image_type]}"
 
     def publish_infos(self) -> None:
-        """CameraInfo once at scene start (cached; type 5 lands on its image topic, the real quirk)."""
+        """CameraInfo once at scene start (cached), on each `_info` topic.
+
+        Type 5 has none: the real server names its info topic like the image topic, so `..._info` never
+        exists, and an image topic carries only images (the client decodes everything on it as one).
+        """
         for image_type, capture in self.captures.items():
-            info = camera_model.camera_info_message(capture.width, capture.height, capture.fov_deg)
-            self.hub.publish(info_topic_path(self.prefix, image_type), info)
+            path = info_topic_path(self.prefix, image_type)
+            if path != self.topic(image_type):
+                info = camera_model.camera_info_message(capture.width, capture.height, capture.fov_deg)
+                self.hub.publish(path, info)
 
     def set_pose(self, position: np.ndarray, orientation: np.ndarray) -> None:
         with self._cond:

@@ -18,6 +18,11 @@ import numpy as np
 from airsim_mapper.geometry import quat_from_rpy, quat_multiply, quat_normalize
 
 LANDED_HEIGHT_M = 0.15
+MAX_WIND_MPS = 200.0  # wind speeds beyond this are refused (scene or SetWindVelocity)
+# A body pushed by an external force drifts at force / mass x DRAG_TIME_S: the speed at which a linear drag
+# that would stop it in about this time balances the force (the kinematic model has no aerodynamics).
+DRAG_TIME_S = 1.0
+DEFAULT_MASS_KG = 1.0
 
 GroundFn = Callable[[np.ndarray], float]
 
@@ -99,16 +104,37 @@ class Hold(Command):
 class Body:
     """One robot's kinematic state, its active command and its API flags (all thread-safe)."""
 
-    def __init__(self, position: np.ndarray, orientation: np.ndarray, ground: GroundFn) -> None:
+    def __init__(
+        self,
+        position: np.ndarray,
+        orientation: np.ndarray,
+        ground: GroundFn,
+        grounded: bool = False,
+        mass_kg: float = DEFAULT_MASS_KG,
+    ) -> None:
         self.lock = threading.RLock()
-        self.state = Kinematic(np.array(position, dtype=float), quat_normalize(orientation))
-        self.home = np.array(position, dtype=float)
         self.ground = ground
+        self.grounded = grounded  # a ground vehicle: it rests on the surface below it, wherever it is put
+        self.state = Kinematic(self._rested(position), quat_normalize(orientation))
+        self.home = self.state.position.copy()
+        self.mass_kg = float(mass_kg)
         self.api_control = False
         self.armed = False
         self.active: Command | None = None
-        self.updated_ns = 0
-        self.wind = np.zeros(3)  # world NED m/s: an idle airborne body drifts with it
+        self.placed_ns: int | None = None  # sim time of the last teleport, until a tick has passed it
+        self.wind = np.zeros(3)  # world NED m/s: an idle, armed, airborne body drifts with it
+        self.external_force = np.zeros(3)  # world NED N (SetExternalForce): it drifts with this too
+
+    def _rested(self, position: np.ndarray) -> np.ndarray:
+        """`position`, moved onto the surface below it for a ground vehicle."""
+        position = np.array(position, dtype=float)
+        if self.grounded:
+            position[2] = self.ground(position)
+        return position
+
+    def drift(self) -> np.ndarray:
+        """The velocity of an idle, armed, airborne body: the wind's, plus what the external force adds."""
+        return self.wind + self.external_force * (DRAG_TIME_S / self.mass_kg)
 
     # -- commands
 
@@ -136,11 +162,17 @@ class Body:
         with self.lock:
             return self.state.copy()
 
-    def teleport(self, position: np.ndarray, orientation: np.ndarray, reset_kinematics: bool) -> None:
-        """SetPose / desired_pose: jump there; the running command is cancelled (it replies False)."""
+    def teleport(
+        self, position: np.ndarray, orientation: np.ndarray, reset_kinematics: bool, now_ns: int | None = None
+    ) -> None:
+        """SetPose / desired_pose: jump there; the running command is cancelled (it replies False).
+
+        `now_ns` is the sim time of the jump: the tick that follows moves the body only for the time since.
+        """
         self.cancel()
         with self.lock:
-            self.state.position = np.array(position, dtype=float)
+            self.placed_ns = now_ns
+            self.state.position = self._rested(position)
             self.state.orientation = quat_normalize(orientation)
             if reset_kinematics:
                 for name in (
@@ -196,13 +228,20 @@ class Body:
         with self.lock:
             state = self.state
             command = self.active
+            drift = self.drift()
             drifting = (
                 command is None
-                and bool(np.any(self.wind))
+                and self.armed  # a disarmed robot is held where it is, as on a stand
+                and bool(np.any(drift))
                 and self.ground(state.position) - state.position[2] > LANDED_HEIGHT_M
             )
             if command is None and not drifting and self._at_rest():
                 return  # nothing moves: skip the world queries (an idle server stays cheap)
+            if self.placed_ns is not None and now_ns is not None:
+                dt = min(dt, (now_ns - self.placed_ns) / 1e9)  # time before the jump is not spent here
+                if dt <= 0:
+                    return
+                self.placed_ns = None
             if command is not None and command.start_ns is not None and now_ns is not None:
                 dt = min(dt, (now_ns - command.start_ns) / 1e9)
                 if dt <= 0:
@@ -222,15 +261,14 @@ class Body:
                     if motion is None:
                         self.active = None
                         command.finish(True)
-            velocity = (
-                motion.velocity if motion is not None else self.wind.copy() if drifting else np.zeros(3)
-            )
+            velocity = motion.velocity if motion is not None else drift if drifting else np.zeros(3)
             yaw_rate = motion.yaw_rate if motion is not None else 0.0
             new_position = state.position + velocity * step
             if np.any(new_position != state.position):
                 # the surface below the new x, y as seen from the higher of the old and new heights
                 probe = np.array([new_position[0], new_position[1], min(new_position[2], state.position[2])])
-                new_position[2] = min(new_position[2], self.ground(probe))
+                surface = self.ground(probe)
+                new_position[2] = surface if self.grounded else min(new_position[2], surface)
                 if blocked is not None and blocked(state.position, new_position):
                     new_position = state.position.copy()
             with np.errstate(over="ignore", invalid="ignore"):

@@ -15,6 +15,7 @@ import numpy as np
 from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.camera_services import CameraServices
 from airsim_mapper.simserver.messages import MessageError
+from airsim_mapper.simserver.motion import DRAG_TIME_S
 from airsim_mapper.simserver.motion_services import MotionServices
 from airsim_mapper.simserver.robot_params import (
     YAW_RATE_LIMIT,
@@ -55,7 +56,7 @@ class RobotServices:
             Method(f"{p}/SetPose", ("pose", "reset_kinematics"), self._set_pose),
             Method(f"{p}/GetGroundTruthGeoLocation", (), self._get_geo),
             Method(f"{p}/GetEstimatedGeoLocation", (), self._get_geo),
-            Method(f"{p}/SetExternalForce", ("ext_force",), lambda _: True),
+            Method(f"{p}/SetExternalForce", ("ext_force",), self._set_external_force),
             Method(f"{p}/GetReadyState", (), self._ready_state),
             Method(f"{p}/CancelLastTask", (), lambda _: self.robot.body.cancel()),
             Method(f"{p}/SetParameter", ("index", "value"), self._set_parameter),
@@ -66,6 +67,19 @@ class RobotServices:
                 table += self._battery_methods(path.rsplit("/", 1)[0], stream)
         table += self._actuator_methods()
         return table
+
+    def _set_external_force(self, params: dict[str, Any]) -> bool:
+        """SetExternalForce: a constant force (N, world NED) on the body until set again; an idle airborne
+        body drifts with it (`Body.drift`)."""
+        force = params["ext_force"]
+        if not isinstance(force, list) or len(force) != 3:
+            raise parameter_error("ext_force", f"must be a list of 3 numbers, got {force!r}")
+        vector = np.array([finite({"ext_force": f}, "ext_force") for f in force])
+        body = self.robot.body
+        check_speed("ext_force", vector * (DRAG_TIME_S / body.mass_kg))
+        with body.lock:
+            body.external_force = vector
+        return True
 
     def _set_parameter(self, params: dict[str, Any]) -> bool:
         """UnrealRobot's SetParameter(index, value): stored; the kinematic body has no such inputs."""
@@ -148,7 +162,7 @@ class RobotServices:
         check_speed("kinematics", kin.linear_velocity)
         if not float(np.linalg.norm(kin.angular_velocity)) <= YAW_RATE_LIMIT:
             raise parameter_error("kinematics", f"angular velocity must be within {YAW_RATE_LIMIT:g} rad/s")
-        self.robot.body.teleport(kin.position, kin.orientation, reset_kinematics=True)
+        self.robot.body.teleport(kin.position, kin.orientation, True, self.robot.clock.now_ns())
         with self.robot.body.lock:
             self.robot.body.state.linear_velocity = kin.linear_velocity
             self.robot.body.state.angular_velocity = kin.angular_velocity
@@ -164,7 +178,8 @@ class RobotServices:
         except MessageError as exc:
             raise ServiceError(str(exc), code=2.0) from exc
         within_world("pose", position)
-        self.robot.body.teleport(position, orientation, bool(params["reset_kinematics"]))
+        now = self.robot.clock.now_ns()
+        self.robot.body.teleport(position, orientation, bool(params["reset_kinematics"]), now)
         self.robot.publish_pose(self.robot.clock.now_ns())
         return True
 

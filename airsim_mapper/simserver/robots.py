@@ -52,7 +52,7 @@ class RobotRuntime:
     ) -> None:
         self.scene, self.spec, self.world, self.hub, self.clock = scene, spec, world, hub, clock
         self.prefix = scene.robot_prefix(spec.name)
-        self.body = Body(spec.position, spec.orientation, self.ground_z)
+        self.body = Body(spec.position, spec.orientation, self.ground_z, spec.rover, spec.mass_kg)
         self.pose_path = f"{self.prefix}/actual_pose"
         self.collision_path = f"{self.prefix}/collision_info"
         self.last_collision_ns: int | None = None
@@ -166,5 +166,5 @@ class RobotRuntime:
         except (MessageError, ServiceError) as exc:
             LOG.warning("ignored a desired_pose for %s: %s", self.spec.name, exc)
             return
-        self.body.teleport(position, orientation, reset_kinematics=True)
+        self.body.teleport(position, orientation, True, self.clock.now_ns())
         self.publish_pose(self.clock.now_ns())

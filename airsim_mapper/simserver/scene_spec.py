@@ -4,7 +4,7 @@
 the real server registers for that scene (protocol.md §4): per robot `actual_pose`, `desired_pose`,
 `collision_info`, `rotor_info`; per enabled sensor its leaves; per capture-enabled camera setting the image
 topic and its `_info` topic, except type 5 whose info topic has the image topic's own name (a real-server
-quirk reproduced here: one row, message type `image`, whose cached value at scene start is CameraInfo).
+quirk: one row, message type `image`; its CameraInfo is not published, so the topic carries only images).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
 from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
+from airsim_mapper.simserver.motion import DEFAULT_MASS_KG, MAX_WIND_MPS
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
 IMAGE_TYPE_NAMES = SIM_IMAGE_LEAVES
@@ -101,6 +102,19 @@ class RobotSpec:
     def physics_type(self) -> str:
         return str(self.config.get("physics-type", "fast-physics"))
 
+    @property
+    def mass_kg(self) -> float:
+        """The sum of the links' `inertial.mass` (checked by the parser); DEFAULT_MASS_KG if none is given."""
+        links = self.config.get("links", []) or []
+        masses = [
+            float(link["inertial"]["mass"])
+            for link in links
+            if isinstance(link, Mapping)
+            and isinstance(link.get("inertial"), Mapping)
+            and "mass" in link["inertial"]
+        ]
+        return sum(masses) if masses else DEFAULT_MASS_KG
+
     def actuator_ids(self) -> list[str]:
         actuators = self.config.get("actuators", []) or []
         return [str(a["name"]) for a in actuators if isinstance(a, Mapping) and "name" in a]
@@ -120,6 +134,7 @@ class SceneSpec:
     clock: ClockSpec
     home_geo: tuple[float, float, float]
     env_actors: tuple[EnvActorSpec, ...] = ()
+    wind: tuple[float, float, float] = (0.0, 0.0, 0.0)  # world NED m/s, the scene's `wind.velocity`
 
     @property
     def prefix(self) -> str:
@@ -286,6 +301,13 @@ def _robot(actor: Mapping[str, Any], index: int, home: tuple[float, float, float
     duplicates = sorted({i for i in ids if ids.count(i) > 1})
     if duplicates:
         raise SceneSpecError(f"{where} has duplicate sensor ids: {', '.join(duplicates)}")
+    links = config.get("links", []) or []
+    for i, link in enumerate(links if isinstance(links, list) else []):
+        inertial = link.get("inertial") if isinstance(link, Mapping) else None
+        if isinstance(inertial, Mapping) and "mass" in inertial:
+            mass = _number(inertial["mass"], f"{where} links[{i}] 'inertial.mass'")
+            if mass <= 0:
+                raise SceneSpecError(f"{where} links[{i}] 'inertial.mass' must be positive, got {mass:g}")
     return RobotSpec(name, position, orientation, config, tuple(sensors))
 
 
@@ -343,7 +365,27 @@ def parse_scene(text: str | bytes) -> SceneSpec:
     if not isinstance(env_actors, list):
         raise SceneSpecError("scene 'environment-actors' must be a list")
     envs = tuple(_env_actor(a, i, home) for i, a in enumerate(env_actors))
-    return SceneSpec(scene_id, tuple(robots), _clock(config.get("clock")), home, envs)
+    wind = _wind(config.get("wind"))
+    return SceneSpec(scene_id, tuple(robots), _clock(config.get("clock")), home, envs, wind)
+
+
+def _wind(wind: Any) -> tuple[float, float, float]:
+    """The scene's `wind` {"velocity": "x y z"} (m/s, world NED); calm without one."""
+    if wind is None:
+        return (0.0, 0.0, 0.0)
+    if not isinstance(wind, Mapping):
+        raise SceneSpecError(f"scene 'wind' must be an object, got {wind!r}")
+    text = wind.get("velocity", "0 0 0")
+    parts = text.split() if isinstance(text, str) else []
+    try:
+        velocity = tuple(float(p) for p in parts)
+    except ValueError:
+        velocity = ()
+    if len(velocity) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_WIND_MPS for v in velocity):
+        raise SceneSpecError(
+            f"scene wind 'velocity' must be three numbers within {MAX_WIND_MPS:g} m/s, got {text!r}"
+        )
+    return velocity  # type: ignore[return-value]
 
 
 def _env_actor(actor: Any, index: int, home: tuple[float, float, float]) -> EnvActorSpec:
@@ -373,7 +415,7 @@ def camera_topics(prefix: str, sensor: SensorSpec) -> list[TopicInfo]:
 
 
 def info_topic_path(prefix: str, image_type: int) -> str:
-    """Where a camera's CameraInfo is published (type 5: on the image topic itself, the real quirk)."""
+    """The path of a camera's info topic (type 5: the image topic's own, the real quirk)."""
     name = IMAGE_TYPE_NAMES[image_type]
     return f"{prefix}/{name}" if image_type == DISPARITY_NORMALIZED else f"{prefix}/{name}_info"
 

@@ -95,9 +95,11 @@ class Session:
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
         self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories)
-        self.visuals = VisualSettings(self._set_wind)
+        self.visuals = VisualSettings(self._set_wind, list(spec.wind))
+        self._set_wind(list(spec.wind))
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns
+        self.last_pose_ns = self.last_tick_ns  # `start` publishes the first pose at this time
 
     def topics(self) -> list[TopicInfo]:
         return topic_table(self.spec)
@@ -212,10 +214,17 @@ class Session:
             robot.stop()
 
     def tick(self, publish_pose: bool) -> None:
-        """Simulation thread: integrate motion by the sim time elapsed, publish pose and instruments."""
+        """Simulation thread: integrate motion by the sim time elapsed, publish pose and instruments.
+
+        A pose goes out only for a new sim time, as the real server publishes one per physics tick: a
+        paused clock sends none, and a lock-step step sends one (a teleport publishes its own).
+        """
         now = self.clock.now_ns()
         dt = (now - self.last_tick_ns) / 1e9
         self.last_tick_ns = now
+        publish_pose = publish_pose and now != self.last_pose_ns
+        if publish_pose:
+            self.last_pose_ns = now
         for robot in self.robots.values():
             robot.tick(dt, now)
             if publish_pose:

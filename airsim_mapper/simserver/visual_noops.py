@@ -16,6 +16,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from airsim_mapper.simserver.motion import MAX_WIND_MPS
 from airsim_mapper.simserver.services import Method, ServiceError
 
 LOG = logging.getLogger("airsim_mapper.simserver")
@@ -57,13 +58,14 @@ IGNORED: dict[str, tuple[str, ...]] = {
     "SetLightObjectRadius": ("object_name", "new_radius"),
 }
 DEFAULT_TIME_OF_DAY = "2021-01-01 12:00:00"
-MAX_WIND_MPS = 200.0
 
 
 class VisualSettings:
     """The values the visual setters last stored, so that their getters answer consistently."""
 
-    def __init__(self, on_wind: Callable[[list[float]], None] | None = None) -> None:
+    def __init__(
+        self, on_wind: Callable[[list[float]], None] | None = None, wind: list[float] | None = None
+    ) -> None:
         self._on_wind = on_wind
         self._lock = threading.Lock()
         self._warned: set[str] = set()
@@ -71,7 +73,7 @@ class VisualSettings:
         self.sun_intensity = 1.0
         self.cloud_shadow = 0.0
         self.time_of_day = DEFAULT_TIME_OF_DAY
-        self.wind = [0.0, 0.0, 0.0]
+        self.wind = list(wind) if wind is not None else [0.0, 0.0, 0.0]  # the scene's, until set
 
     def _warn(self, method: str, what: str = "") -> None:
         with self._lock:

@@ -65,11 +65,19 @@ def call(name: str, *args):
     return rospy.ServiceProxy(name, SetBool if name.endswith("/pause") else Trigger)(*args)
 
 
-def clock_ns() -> int:
-    import rospy
-    from rosgraph_msgs.msg import Clock
+class ClockWatch:
+    """Every /clock stamp published since the watch began (ns)."""
 
-    return rospy.wait_for_message("/clock", Clock, timeout=10).clock.to_nsec()
+    def __init__(self) -> None:
+        import rospy
+        from rosgraph_msgs.msg import Clock
+
+        self.stamps: list[int] = []
+        self.sub = rospy.Subscriber("/clock", Clock, lambda m: self.stamps.append(m.clock.to_nsec()))
+        wait_until(lambda: self.stamps, 10, what="/clock")
+
+    def shows(self, stamp_ns: int, what: str) -> None:
+        wait_until(lambda: self.stamps[-1] == stamp_ns, 5, what=what)
 
 
 def test_every_control_service_is_advertised_with_its_type(rig: Stack):
@@ -144,20 +152,24 @@ def test_flying_into_a_block_reports_the_collision_and_reset_returns_to_the_orig
 
 
 def test_pause_stops_sim_time_step_advances_one_step_and_resume_runs_it_again(rig: Stack):
+    clock = ClockWatch()
     reply = call("/airsim_node/pause", True)
     try:
         assert reply.success and reply.message.startswith("Sim time paused at t = ")
         paused_at = int(reply.message.rsplit(" ", 1)[1])
+        clock.shows(paused_at, "/clock to show the pause")
+        seen = len(clock.stamps)
         time.sleep(0.3)
-        assert clock_ns() == paused_at
+        assert len(clock.stamps) == seen  # paused: no physics tick, so no pose and no /clock
         stepped = call("/airsim_node/step")
         assert stepped.success and int(stepped.message) == paused_at + STEP_NS
-        wait_until(lambda: clock_ns() == paused_at + STEP_NS, 5, what="/clock to show the step")
+        clock.shows(paused_at + STEP_NS, "/clock to show the step")
         time.sleep(0.2)
-        assert clock_ns() == paused_at + STEP_NS  # paused again after the step
+        assert clock.stamps[seen:] == [paused_at + STEP_NS]  # one step, one stamp; paused again after it
     finally:
         resumed = call("/airsim_node/pause", False)
     assert resumed.success and resumed.message.startswith("Sim time resumed from t = ")
-    before = clock_ns()
+    before = clock.stamps[-1]
     time.sleep(0.2)
-    assert clock_ns() - before > 100_000_000
+    assert clock.stamps[-1] - before > 100_000_000
+    clock.sub.unregister()

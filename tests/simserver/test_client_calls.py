@@ -106,7 +106,39 @@ def test_rover_controls_drive_and_steer_and_heading_moves_turn_it(client):
     assert straight[0] == pytest.approx(1.0, abs=0.05) and straight[1] == pytest.approx(0.0, abs=1e-6)
     assert turned > 0.2  # positive steering turns right (towards east)
     assert math.remainder(yaw_of(rover) + math.pi / 2, 2 * math.pi) == pytest.approx(0.0, abs=math.radians(5))
-    assert position(rover)[2] == pytest.approx(-0.02, abs=1e-3)  # on the landing pad
+    x, y, z = position(rover)
+    assert max(abs(x), abs(y)) > 2.0 and z == pytest.approx(0.0, abs=1e-6)  # off the 4 m pad: on the ground
+
+
+def test_a_rover_spawned_in_the_air_rests_on_the_ground(client):
+    config = rover_scene()
+    config["actors"][0]["origin"] = {"xyz": "0 0 -10", "rpy-deg": "0 0 0"}
+    world = loaded(client, config)
+    rover = Rover(client, world, "Rover1")
+    assert position(rover) == pytest.approx([0.0, 0.0, -0.02], abs=1e-6)  # on the landing pad at once
+    teleport(rover, 20.0, 0.0, -5.0)
+    assert position(rover) == pytest.approx([20.0, 0.0, 0.0], abs=1e-6)  # on the ground plane
+
+
+def test_the_scenes_wind_blows_and_an_external_force_pushes_an_idle_drone(client):
+    config = copy.deepcopy(scene_config("scene_basic_drone.jsonc"))
+    config["wind"] = {"velocity": "0.0 10.0 0.0"}  # as the client's wind example scene sets it
+    world = loaded(client, config)
+    drone = Drone(client, world, "Drone1")
+    assert world.get_wind_velocity() == (0.0, 10.0, 0.0)
+    assert drone.enable_api_control() is True and drone.arm() is True
+    world.pause()
+    teleport(drone, 0.0, 0.0, -10.0)
+    world.continue_for_sim_time(1_000_000_000, wait_until_complete=True)
+    assert position(drone) == pytest.approx([0.0, 10.0, -10.0], abs=0.01)
+    assert world.set_wind_velocity(0.0, 0.0, 0.0) is True
+    assert drone.set_external_force([0.0, -0.3, 0.0]) is True  # on a 1 kg robot: 0.3 m/s
+    world.continue_for_sim_time(1_000_000_000, wait_until_complete=True)
+    assert position(drone) == pytest.approx([0.0, 9.7, -10.0], abs=0.01)
+    assert drone.set_external_force([0.0, 0.0, 0.0]) is True
+    world.continue_for_sim_time(500_000_000, wait_until_complete=True)
+    assert position(drone) == pytest.approx([0.0, 9.7, -10.0], abs=0.01)
+    world.resume()
 
 
 def test_battery_services_change_what_the_battery_topic_publishes(client, drone_world):

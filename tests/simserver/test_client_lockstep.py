@@ -3,6 +3,8 @@ and lidar scan its time calls for, before the step's reply (1 single step in 8 u
 
 from __future__ import annotations
 
+import time
+
 from projectairsim import World
 
 from simserver.clientkit import load_world, subscribe
@@ -137,3 +139,18 @@ def test_a_subscription_after_a_paused_step_gets_that_steps_sample(client):
         scan["segmentation_cloud"]
     )
     world.resume()
+
+
+def test_a_paused_clock_sends_no_pose_and_each_step_sends_one(client):
+    world: World = load_world(client, "scene_drone_sensors.jsonc")
+    world.pause()
+    paused_at = world.get_sim_time()
+    poses = subscribe(client, f"{world.parent_topic}/robots/Drone1/actual_pose")
+    poses.wait_for(where=lambda m: m["time_stamp"] == paused_at)  # the pose of the paused state
+    before = list(poses.messages)
+    time.sleep(0.5)  # paused: no physics tick, no new pose (the free-running rate is 100 Hz)
+    assert poses.messages == before
+    steps = [world.continue_for_single_step(wait_until_complete=True) for _ in range(10)]
+    poses.wait_for(where=lambda m: m["time_stamp"] == steps[-1])
+    time.sleep(0.3)
+    assert [m["time_stamp"] for m in poses.messages[len(before) :]] == steps  # one pose per step

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from airsim_mapper.geometry import IDENTITY_Q, quat_from_rpy, yaw_of
-from airsim_mapper.simserver.motion import Body, Hold, Kinematic, wrap_angle
+from airsim_mapper.simserver.motion import DRAG_TIME_S, Body, Hold, Kinematic, wrap_angle
 from airsim_mapper.simserver.motion_commands import (
     Land,
     Path,
@@ -179,12 +179,42 @@ def test_a_step_that_would_make_the_state_non_finite_ends_the_command_and_the_bo
 def test_wind_makes_an_idle_airborne_body_drift_but_not_a_commanded_or_landed_one():
     body = body_at(z=-4.0)
     body.wind = np.array([1.0, -0.5, 0.0])
+    run(body, 0.5)
+    assert body.state.position == pytest.approx([0.0, 0.0, -4.0])  # disarmed: held as on a stand
+    body = body_at(z=-4.0)
+    body.armed = True
+    body.wind = np.array([1.0, -0.5, 0.0])
     run(body, 1.0)
     assert body.state.position == pytest.approx([1.0, -0.5, -4.0], abs=1e-6)
     body.run(Velocity([0.0, 0.0, 0.0], 1.0, YawMode()))
     run(body, 0.5)
     assert body.state.position == pytest.approx([1.0, -0.5, -4.0], abs=1e-6)  # the controller holds
     grounded = body_at(z=0.0)
+    grounded.armed = True
     grounded.wind = np.array([3.0, 0.0, 0.0])
     run(grounded, 1.0)
     assert grounded.state.position == pytest.approx([0.0, 0.0, 0.0])
+
+
+def test_an_external_force_pushes_an_idle_body_by_force_over_mass_per_drag_time():
+    body = Body(np.array([0.0, 0.0, -4.0]), IDENTITY_Q, flat_ground, mass_kg=2.0)
+    body.armed = True
+    body.external_force = np.array([0.0, -0.6, 0.0])
+    run(body, 1.0)
+    assert body.state.position == pytest.approx([0.0, -0.3 * DRAG_TIME_S, -4.0], abs=1e-6)
+    body.wind = np.array([1.0, 0.0, 0.0])
+    assert body.drift() == pytest.approx([1.0, -0.3 * DRAG_TIME_S, 0.0])
+
+
+def test_a_ground_vehicle_rests_on_the_surface_below_wherever_it_is_put():
+    def step(position: np.ndarray) -> float:  # a 1 m step up east of y = 5
+        return -1.0 if position[1] >= 5.0 else 0.0
+
+    rover = Body(np.array([0.0, 0.0, -10.0]), IDENTITY_Q, step, grounded=True)
+    assert rover.state.position.tolist() == [0.0, 0.0, 0.0]
+    assert rover.home.tolist() == [0.0, 0.0, 0.0]
+    rover.teleport(np.array([0.0, 6.0, -7.0]), IDENTITY_Q, reset_kinematics=True)
+    assert rover.state.position.tolist() == [0.0, 6.0, -1.0]
+    rover.run(Velocity([0.0, -2.0, 0.0], 1.0, YawMode()))
+    run(rover, 1.0)
+    assert rover.state.position == pytest.approx([0.0, 4.0, 0.0], abs=0.01)  # down the step with it

@@ -79,7 +79,7 @@ def test_topic_rows_carry_the_real_type_message_type_and_frequency():
     assert rows[f"{base}/sensors/DistanceSensor/distance_sensor"].message_type == "distance-sensor"
 
 
-def test_disparity_camera_info_is_published_on_the_image_topic_itself():
+def test_the_disparity_info_topic_has_the_image_topics_own_name():
     assert info_topic_path("/p", 5) == "/p/disparity_normalized_camera"
     assert info_topic_path("/p", 0) == "/p/scene_camera_info"
 
@@ -311,6 +311,15 @@ def set_sensor(scene: dict, sensor: dict) -> None:
             ),
             "sensor 'C': 'annotation-settings.bbox3D-settings.alignment' must be 'oriented' or 'axis'",
         ),
+        (
+            json.dumps(minimal(wind={"velocity": "0 10"})),
+            r"scene wind 'velocity' must be three numbers within 200 m/s, got '0 10'",
+        ),
+        (json.dumps(minimal(wind=[0, 10, 0])), r"scene 'wind' must be an object, got \[0, 10, 0\]"),
+        (
+            bad(lambda s: s["actors"][0]["robot-config"].update(links=[{"inertial": {"mass": 0}}])),
+            r"robot 'D' links\[0\] 'inertial.mass' must be positive, got 0",
+        ),
     ],
 )
 def test_invalid_scenes_are_rejected_with_a_message_saying_what_is_wrong(text, message):
@@ -325,3 +334,13 @@ def test_max_depth_meters_is_read_per_capture_and_defaults_to_100():
     spec = parse_scene(json.dumps(scene))
     settings = {c.image_type: c for c in spec.robots[0].sensors[0].captures}
     assert (settings[4].max_depth_m, settings[0].max_depth_m) == (25.0, 100.0)
+
+
+def test_the_scenes_wind_and_each_robots_mass_are_read():
+    scene = minimal(wind={"velocity": "0.0 10.0 -1.5"})
+    scene["actors"][0]["robot-config"]["links"] = [{"inertial": {"mass": 1.0}}, {"inertial": {"mass": 0.25}}]
+    spec = parse_scene(json.dumps(scene))
+    assert spec.wind == (0.0, 10.0, -1.5)
+    assert spec.robots[0].mass_kg == 1.25
+    calm = parse_scene(json.dumps(minimal()))
+    assert calm.wind == (0.0, 0.0, 0.0) and calm.robots[0].mass_kg == 1.0
