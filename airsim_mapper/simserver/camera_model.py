@@ -49,7 +49,7 @@ class RenderedImage:
     encoding: str  # "BGR" or "16FC1"
     width: int
     height: int
-    data: bytes  # row-major, top-left origin, channels interleaved, no padding
+    data: bytes | memoryview  # row-major, top-left origin, channels interleaved, no padding
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +70,22 @@ class RenderRequest:
     def kinds(self) -> list[int]:
         """The requested image types in request order, each once."""
         return list(dict.fromkeys(self.image_types))
+
+    def layout(self) -> dict[int, tuple[str, int, int]]:
+        """Each image type's (encoding, byte offset, byte size) when the images lie one after another in
+        one buffer, in request order (how the render worker hands its images over)."""
+        out, offset = {}, 0
+        for kind in self.kinds:
+            encoding, size = ("16FC1", 2) if kind in DEPTH_TYPES else ("BGR", 3)
+            size *= self.width * self.height
+            out[kind] = (encoding, offset, size)
+            offset += size
+        return out
+
+    @property
+    def nbytes(self) -> int:
+        """The size of the buffer `layout` fills."""
+        return sum(size for _, _, size in self.layout().values())
 
     def check(self) -> None:
         """CameraError if the size, field of view or an image type is invalid."""

@@ -356,8 +356,11 @@ class GLRenderer:
             vao.render(moderngl.TRIANGLES, vertices=count)
         return fbo
 
-    def render(self, world: World, request: RenderRequest) -> dict[int, RenderedImage]:
-        """`rendering.render` (the request already checked): the same images, rendered with OpenGL."""
+    def render(
+        self, world: World, request: RenderRequest, into: memoryview | None = None
+    ) -> dict[int, RenderedImage]:
+        """`rendering.render` (the request already checked): the same images, rendered with OpenGL; read
+        back into `into` at the request's `layout` if given (the images' data are then views of it)."""
         types = request.kinds
         if not types:
             return {}
@@ -369,14 +372,16 @@ class GLRenderer:
         try:
             with self.ctx:  # current in this thread for the render (a context is current per thread)
                 fbo = self.draw(world, request, kinds)
-                for kind in types:
-                    i = kinds.index(kind)
-                    if OUTPUTS[kind][1]:
-                        data = fbo.read(components=1, attachment=i, dtype="f2")
-                        out[kind] = RenderedImage("16FC1", width, height, data)
+                for kind, (encoding, offset, size) in request.layout().items():
+                    depth = OUTPUTS[kind][1]
+                    read = {"components": 1 if depth else 3, "attachment": kinds.index(kind)}
+                    read["dtype"] = "f2" if depth else "u1"
+                    if into is None:
+                        data: bytes | memoryview = fbo.read(**read)
                     else:
-                        data = fbo.read(components=3, attachment=i, dtype="u1")
-                        out[kind] = RenderedImage("BGR", width, height, data)
+                        fbo.read_into(into, write_offset=offset, **read)
+                        data = into[offset : offset + size]
+                    out[kind] = RenderedImage(encoding, width, height, data)
         except moderngl.Error as exc:
             raise GLRenderError(f"OpenGL cannot render {width}x{height}: {exc}") from exc
         return out
@@ -395,8 +400,8 @@ def renderer() -> GLRenderer:
         return _RENDERER[1]
 
 
-def render(world: World, request: RenderRequest) -> dict[int, RenderedImage]:
+def render(world: World, request: RenderRequest, into: memoryview | None = None) -> dict[int, RenderedImage]:
     """`rendering.render` with OpenGL in this process's context; one render at a time per process."""
     gl = renderer()
     with _LOCK:
-        return gl.render(world, request)
+        return gl.render(world, request, into)

@@ -21,6 +21,7 @@ import msgpack
 import numpy as np
 
 API_VERSION = 1.0
+LARGE_BYTES = 4096  # byte strings from this size on are packed by reference (see `message_frame`)
 
 
 class FrameType(IntEnum):
@@ -75,6 +76,23 @@ def _map_header(n: int) -> bytes:
     if n < 0x10000:
         return b"\xde" + struct.pack(">H", n)
     return b"\xdf" + struct.pack(">I", n)
+
+
+def _bin_header(n: int) -> bytes:
+    if n < 0x100:
+        return b"\xc4" + bytes([n])
+    if n < 0x10000:
+        return b"\xc5" + struct.pack(">H", n)
+    return b"\xc6" + struct.pack(">I", n)
+
+
+def _raw_header(n: int) -> bytes:
+    """msgpack raw (str) header, as `use_bin_type=False` packs bytes: no str8 in the old format."""
+    if n < 32:
+        return bytes([0xA0 | n])
+    if n < 0x10000:
+        return b"\xda" + struct.pack(">H", n)
+    return b"\xdb" + struct.pack(">I", n)
 
 
 def _typed_array(values: np.ndarray, marker: int, dtype: str) -> Raw:
@@ -135,6 +153,8 @@ def _pack_into(obj: Any, out: list[bytes]) -> None:
         out.append(_numpy_array(obj).data)
     elif isinstance(obj, np.generic):
         out.append(msgpack.packb(obj.item(), use_bin_type=True))
+    elif isinstance(obj, bytes) and len(obj) >= LARGE_BYTES:
+        out += (_bin_header(len(obj)), obj)  # kept by reference: copied once, by the final join
     else:
         out.append(msgpack.packb(obj, use_bin_type=True))
 
@@ -152,6 +172,33 @@ def pack(obj: Any) -> bytes:
 def encode_frame(topic: str, body: bytes, frame_type: int = FrameType.MESSAGE) -> bytes:
     """A topics frame as the C++ server packs it: topic and body as msgpack str (raw)."""
     return msgpack.packb([int(frame_type), topic, body], use_bin_type=False)
+
+
+@dataclass(frozen=True)
+class TopicFrame:
+    """A MESSAGE frame packed once (`encode_frame` of the packed message): sent as it is, body on demand."""
+
+    frame: bytes
+    body_offset: int
+
+    @property
+    def body(self) -> bytes:
+        return self.frame[self.body_offset :]
+
+
+def message_frame(topic: str, message: Any) -> TopicFrame:
+    """`encode_frame(topic, pack(message))` with the message's large byte strings copied once (an image's
+    pixels were copied three times: into the body, by its join, and into the frame). `message` may be an
+    already packed body (bytes)."""
+    chunks: list[bytes] = []
+    if isinstance(message, bytes):
+        chunks.append(message)
+    else:
+        _pack_into(message, chunks)
+    size = sum(len(chunk) for chunk in chunks)
+    head = _array_header(3) + msgpack.packb(int(FrameType.MESSAGE)) + msgpack.packb(topic, use_bin_type=False)
+    head += _raw_header(size)
+    return TopicFrame(b"".join([head, *chunks]), len(head))
 
 
 def decode_frame(raw: bytes) -> Frame:

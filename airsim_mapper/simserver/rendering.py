@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import os
 import threading
+from dataclasses import replace
 
 from airsim_mapper.simserver import gl_renderer
 from airsim_mapper.simserver.camera_model import CameraError, RenderedImage, RenderRequest
@@ -69,17 +70,27 @@ def renderer_name() -> str:
     return CHOICE.name()
 
 
-def render(world: World, request: RenderRequest) -> dict[int, RenderedImage]:
-    """The requested images of a camera, by this process's renderer; CameraError if the request is invalid."""
+def render(world: World, request: RenderRequest, into: memoryview | None = None) -> dict[int, RenderedImage]:
+    """The requested images of a camera, by this process's renderer; CameraError if the request is invalid.
+
+    With `into` (at least `request.nbytes`), the images are written there at `request.layout()` and
+    their data are views of it.
+    """
     request.check()
     if not request.kinds:
         return {}
     if CHOICE.name() == "gl":
         try:
-            return gl_renderer.render(world, request)
+            return gl_renderer.render(world, request, into)
         except gl_renderer.GLUnavailable as exc:
             LOG.error("camera images: %s; rendering with the numpy ray caster from now on (much slower)", exc)
             CHOICE.fall_back()
         except gl_renderer.GLRenderError as exc:
             LOG.warning("camera images: %s; ray casting this one", exc)
-    return render_raycast(world, request)
+    images = render_raycast(world, request)
+    if into is None:
+        return images
+    for kind, (_, offset, size) in request.layout().items():
+        into[offset : offset + size] = images[kind].data
+        images[kind] = replace(images[kind], data=into[offset : offset + size])
+    return images

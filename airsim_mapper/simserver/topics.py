@@ -73,7 +73,7 @@ class TopicHub:
         self._outbox = Outbox(self._write)
         self._table: dict[str, TopicInfo] = {}
         self._subscribed: set[str] = set()
-        self._cache: dict[str, bytes | Make] = {}  # a function: a sample offered but not made yet
+        self._cache: dict[str, protocol.TopicFrame | Make] = {}  # a function: offered, not made yet
         self._handlers: dict[str, MessageHandler] = {}
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._recv_loop, name="topics-recv", daemon=True)
@@ -94,12 +94,12 @@ class TopicHub:
     def set_table(self, infos: Iterable[TopicInfo], handlers: dict[str, MessageHandler]) -> None:
         """Replace the topic table (scene load): cache and subscriptions start empty, `/$topics` is cached."""
         infos = list(infos)
-        body = protocol.pack(topic_list_message(infos))
+        frame = protocol.message_frame(TOPICS_PATH, topic_list_message(infos))
         with self._lock:
             self._table = {info.path: info for info in infos}
             self._table.setdefault(TOPICS_PATH, TopicInfo(TOPICS_PATH, PUBLISHED, "topic-list", 0))
             self._subscribed.clear()
-            self._cache = {TOPICS_PATH: body}
+            self._cache = {TOPICS_PATH: frame}
             self._handlers = dict(handlers)
 
     def table(self) -> dict[str, TopicInfo]:
@@ -116,26 +116,27 @@ class TopicHub:
     def cached(self, path: str) -> bytes | None:
         """The last value of `path`, packed (an offered sample is made now)."""
         with self._lock:
-            return self._made(path)
+            made = self._made(path)
+        return made.body if made is not None else None
 
-    def _made(self, path: str) -> bytes | None:
-        """The cached body of `path`, making an offered sample first (call with the lock held)."""
+    def _made(self, path: str) -> protocol.TopicFrame | None:
+        """The cached frame of `path`, making an offered sample first (call with the lock held)."""
         cached = self._cache.get(path)
         if callable(cached):
-            cached = self._cache[path] = protocol.pack(cached())
+            cached = self._cache[path] = protocol.message_frame(path, cached())
         return cached
 
     # -- publishing
 
     def publish(self, path: str, message: Any) -> bool:
         """Cache `message` (packed) as the last value of `path`; send it if subscribed. False if unknown."""
-        body = message if isinstance(message, bytes) else protocol.pack(message)
+        frame = protocol.message_frame(path, message)
         with self._lock:
             if path not in self._table:
                 return False
-            self._cache[path] = body
+            self._cache[path] = frame
             if path in self._subscribed:  # queued under the lock, so frames keep the order of their caching
-                self._send(path, body)
+                self._send(path, frame)
         return True
 
     def offer(self, path: str, make: Make) -> bool:
@@ -163,8 +164,8 @@ class TopicHub:
                 self._subscribed.discard(path)
         return all_known
 
-    def _send(self, path: str, body: bytes) -> None:
-        self._outbox.put(path, protocol.encode_frame(path, body))
+    def _send(self, path: str, frame: protocol.TopicFrame) -> None:
+        self._outbox.put(path, frame.frame)
 
     def _write(self, path: str, frame: bytes) -> None:
         """The outbox's sender thread: one frame onto the socket."""

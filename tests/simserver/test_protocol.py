@@ -152,3 +152,17 @@ def test_pack_refuses_numpy_arrays_it_cannot_represent():
 
 def test_parameters_are_dumped_like_nlohmann_json_in_error_messages():
     assert protocol.dump_params({"b": 1, "a": [1, 2]}) == '{"a":[1,2],"b":1}'
+
+
+@pytest.mark.parametrize("size", [0, 31, 32, 255, 256, 4095, 4096, 65535, 65536, 70000])
+def test_a_message_frame_is_the_frame_of_the_packed_message_byte_for_byte(size):
+    data = bytes(range(256)) * (size // 256) + bytes(size % 256)
+    message = {"time_stamp": 7, "encoding": "BGR", "data": data, "pose": np.arange(3.0)}
+    frame = protocol.message_frame("/Sim/S/robots/R/sensors/C/scene_camera", message)
+    body = protocol.pack(message)
+    assert frame.frame == protocol.encode_frame("/Sim/S/robots/R/sensors/C/scene_camera", body)
+    assert frame.body == body
+    assert protocol.decode_body(body)["data"] == data
+    assert body == protocol.pack({**message, "pose": protocol.float32_array(np.arange(3.0))})
+    packed = protocol.message_frame("/t", body)  # an already packed body
+    assert packed.frame == protocol.encode_frame("/t", body)

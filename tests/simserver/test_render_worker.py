@@ -170,7 +170,7 @@ def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(la
 def test_a_worker_that_cannot_start_is_reported_once_and_the_server_renders_in_process(
     worker, monkeypatch, caplog
 ):
-    monkeypatch.setattr(render_worker, "_command", lambda fd, nice: ["/bin/false"])
+    monkeypatch.setattr(render_worker, "_command", lambda fd, nice, buffer_fd: ["/bin/false"])
     with caplog.at_level(logging.ERROR, logger=render_worker.LOG.name):
         first = worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3]))
         second = worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3]))
@@ -183,7 +183,7 @@ def test_a_worker_that_cannot_start_is_reported_once_and_the_server_renders_in_p
 def test_a_replacement_that_cannot_start_falls_back_to_rendering_in_process(worker, monkeypatch, caplog):
     worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     first = worker.pid
-    monkeypatch.setattr(render_worker, "_command", lambda fd, nice: ["/bin/false"])
+    monkeypatch.setattr(render_worker, "_command", lambda fd, nice, buffer_fd: ["/bin/false"])
     os.kill(first, signal.SIGKILL)
     wait_until(lambda: worker._proc.poll() is not None, 5.0, what="the worker to die")
     with caplog.at_level(logging.WARNING, logger=render_worker.LOG.name):

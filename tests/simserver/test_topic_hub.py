@@ -18,7 +18,7 @@ def hub():
     hub.start()
     hub.set_table([TopicInfo(PATH, message_type="airspeed")], {})
     sent: list[tuple[str, dict]] = []
-    hub._send = lambda path, body: sent.append((path, protocol.decode_body(body)))  # no socket traffic
+    hub._send = lambda path, frame: sent.append((path, protocol.decode_body(frame.body)))  # no socket traffic
     hub.sent = sent
     yield hub
     hub.stop()

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from tools import camera_probe
 from tools.bench import costs, renderers, report, scenes
 from tools.bench.e2e import Bench
 
@@ -84,6 +85,9 @@ def main(argv: list[str] | None = None) -> int:
     print(report.costs_table(results["costs"]), flush=True)
     results["renderers"] = renderers.run()
     print(renderers.table(results["renderers"]), flush=True)
+    # the server's own camera path: all seven types of one 1280x720 camera, render worker to socket
+    results["server_camera"] = camera_probe.run(seconds=3.0 if args.quick else 8.0)
+    print(camera_probe.table(results["server_camera"]), flush=True)
     if not args.costs_only:
         workdir = Path(tempfile.mkdtemp(prefix="airsim_mapper_bench_"))
         profile_dir = workdir if args.profile else None

@@ -199,6 +199,21 @@ def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
         for name, value, limit in render_targets(results["renderers"]):
             met = None if value is None else value >= limit
             out.append(_target(name, value, limit, met, "/s", "headless server, OpenGL on llvmpipe"))
+    server_camera = results.get("server_camera")
+    if server_camera:
+        from tools.camera_probe import TARGET_HZ
+
+        delivered = server_camera["delivered_min_hz"]
+        out.append(
+            _target(
+                "camera 1280x720, all seven types, delivered by the server",
+                delivered,
+                TARGET_HZ * 0.95,
+                delivered >= TARGET_HZ * 0.95,
+                "Hz",
+                "render worker + topics channel (tools/camera_probe.py)",
+            )
+        )
     e2e = results.get("e2e")
     if not e2e:
         return out
