@@ -67,7 +67,7 @@ class CameraStream:
         self._cond = threading.Condition()
         self._requests: dict[int, int] = {}  # image type -> number of waiting GetImages calls
         self._request_time_ns = -1
-        self._latest: dict[int, dict[str, Any]] = {}
+        self._latest: dict[int, protocol.TopicFrame] = {}  # the latest capture of each type, packed
         self._latest_ns = -1
 
     def topic(self, image_type: int) -> str:
@@ -122,7 +122,7 @@ class CameraStream:
         for image_type in image_types:
             capture = self.captures[image_type]
             groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
-        latest: dict[int, dict[str, Any]] = {}
+        latest: dict[int, protocol.TopicFrame] = {}
         boxes = self.annotations(position, orientation)
         for (width, height, fov), types in groups.items():
             vis = self.captures.get(camera_model.DEPTH_VIS)
@@ -142,10 +142,11 @@ class CameraStream:
                 message = messages.image(
                     now_ns, wire.encoding, img.width, img.height, wire.data, position, orientation, boxes
                 )
-                latest[image_type] = message
                 path = self.topic(image_type)
+                # packed now, with the one copy of the pixels: a render worker's are views of its buffer
+                latest[image_type] = frame = protocol.message_frame(path, message)
                 if self.hub.is_subscribed(path):
-                    self.hub.publish(path, message)
+                    self.hub.publish(path, frame)
         with self._cond:
             self._latest.update(latest)
             self._latest_ns = now_ns
@@ -180,10 +181,11 @@ class CameraStream:
                     self._cond.wait(remaining)
                     if self._latest_ns >= t_request and not all(t in self._latest for t in types):
                         self._request_time_ns = max(self._request_time_ns, self._latest_ns + 1)
-                result = {str(t): dict(self._latest[t]) for t in types}
+                frames = {str(t): self._latest[t] for t in types}
             finally:
                 for t in types:
                     self._requests[t] -= 1
+        result = {key: protocol.decode_body(frame.body) for key, frame in frames.items()}
         for entry in result.values():
             entry["data"] = protocol.uint8_list(entry["data"])
         return result

@@ -153,7 +153,7 @@ def _pack_into(obj: Any, out: list[bytes]) -> None:
         out.append(_numpy_array(obj).data)
     elif isinstance(obj, np.generic):
         out.append(msgpack.packb(obj.item(), use_bin_type=True))
-    elif isinstance(obj, bytes) and len(obj) >= LARGE_BYTES:
+    elif isinstance(obj, (bytes, memoryview)) and len(obj) >= LARGE_BYTES:
         out += (_bin_header(len(obj)), obj)  # kept by reference: copied once, by the final join
     else:
         out.append(msgpack.packb(obj, use_bin_type=True))

@@ -12,9 +12,10 @@ one end of a socket pair and answers on the same end (pickled by `multiprocessin
 message is the World; each request is a RenderRequest with the size of the shared image buffer; each
 answer is a small dict of the images made (type -> encoding, width, height), or the CameraError it
 raised. The pixels themselves go through the shared buffer (a memfd both processes map): the child
-renders straight into it at the request's `layout`, and the server copies each image out once. Through
-the socket, a 1280x720 frame of all seven types (17.5 MB) was pickled, sent, received and unpickled:
-four copies and about half of the server's CPU time per frame.
+renders straight into it at the request's `layout`, and the server packs each image from there into its
+topics frame (a render's images are views of the buffer, valid until the next render). Through the
+socket, a 1280x720 frame of all seven types (17.5 MB) was pickled, sent, received and unpickled: four
+copies and about half of the server's CPU time per frame.
 
 The child renders with `rendering.render`, so with OpenGL by default: its EGL context and llvmpipe's threads
 live in the child, at its priority, made on its first render (docs/rendering.md).
@@ -83,7 +84,8 @@ class RenderWorker:
         return self._proc.pid if self._proc is not None else None
 
     def render(self, request: RenderRequest) -> dict[int, RenderedImage]:
-        """`rendering.render(world, request)`, answered by the child."""
+        """`rendering.render(world, request)`, answered by the child; the images' data are views of the
+        shared buffer, valid until the next render."""
         with self._lock:
             if self._closed:
                 raise RenderWorkerError("the render worker is closed")
@@ -187,12 +189,12 @@ def _command(fd: int, nice: int, buffer_fd: int) -> list[str]:
 def _images(
     request: RenderRequest, made: dict[int, tuple[str, int, int]], buffer: memoryview
 ) -> dict[int, RenderedImage]:
-    """The images the child wrote into the shared buffer, copied out (the next render overwrites it)."""
+    """The images the child wrote into the shared buffer, as views of it: valid until the next render."""
     layout = request.layout()
     out = {}
     for kind, (encoding, width, height) in made.items():
         _, offset, size = layout[kind]
-        out[kind] = RenderedImage(encoding, width, height, bytes(buffer[offset : offset + size]))
+        out[kind] = RenderedImage(encoding, width, height, buffer[offset : offset + size])
     return out
 
 

@@ -129,8 +129,9 @@ class TopicHub:
     # -- publishing
 
     def publish(self, path: str, message: Any) -> bool:
-        """Cache `message` (packed) as the last value of `path`; send it if subscribed. False if unknown."""
-        frame = protocol.message_frame(path, message)
+        """Cache `message` (packed, or a frame packed for `path`) as the last value of `path`; send it if
+        subscribed. False if unknown."""
+        frame = message if isinstance(message, protocol.TopicFrame) else protocol.message_frame(path, message)
         with self._lock:
             if path not in self._table:
                 return False

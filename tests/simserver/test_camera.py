@@ -208,8 +208,10 @@ class PublishedImages:
     def is_subscribed(self, path: str) -> bool:
         return True
 
-    def publish(self, path: str, message: dict) -> None:
-        self.messages[path] = message
+    def publish(self, path: str, frame) -> None:
+        from airsim_mapper.simserver import protocol
+
+        self.messages[path] = protocol.decode_body(frame.body)
 
 
 def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(world):
