@@ -27,6 +27,7 @@ from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
 from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
+from airsim_mapper.errors import AirsimMapperError
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
@@ -37,7 +38,7 @@ from airsim_mapper.scene import Scene, scene_from_config
 log = logging.getLogger("rosout.airsim_mapper")
 
 
-class WrapperError(RuntimeError):
+class WrapperError(AirsimMapperError, RuntimeError):
     """The wrapper cannot do what was asked (the message says why)."""
 
 

@@ -33,8 +33,9 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from airsim_mapper.cli.errors import SettingError
 from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
-from airsim_mapper.mapping.errors import ConfigError
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.names import resolve_namespace
 
 if TYPE_CHECKING:
@@ -69,13 +70,6 @@ SETTINGS = (
     Setting("namespace", "", "topic namespace and frame prefix, resolved in the node's ROS namespace"),
 )
 COMMAND_LINE, DEFAULT = "command line", "default"
-
-
-class SettingError(ValueError):
-    """A private parameter holds a value of the wrong type."""
-
-    def __init__(self, name: str, value: Any, kind: type) -> None:
-        super().__init__(f"parameter ~{name}: {value!r} is not a valid {kind.__name__}")
 
 
 @dataclass(frozen=True)

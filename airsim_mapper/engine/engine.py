@@ -33,6 +33,7 @@ from typing import Any
 
 from airsim_mapper.convert.command import shorten
 from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, Throttled, build
+from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
@@ -40,8 +41,8 @@ from airsim_mapper.engine.ros_link import RosLink
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
-from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.scene import Scene, read_scene
@@ -55,10 +56,6 @@ REFUSALS_LOGGED, REFUSALS_PERIOD_S = 10, 10.0  # at most this many refused loads
 SHOWN_LINE = 300  # characters of an error line a refusal log shows
 SHUTDOWN_TIMEOUT_S = 5.0  # shutdown's total budget; the simulator gets at most UNSUBSCRIBE_TIMEOUT_S of it
 UNSUBSCRIBE_TIMEOUT_S = 2.0
-
-
-class EngineError(RuntimeError):
-    """The engine cannot do what was asked right now (the message says why)."""
 
 
 class LogBudget:

@@ -12,10 +12,12 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
+from airsim_mapper.engine.errors import EngineError
+
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
-class RosTypeError(LookupError):
+class RosTypeError(EngineError, LookupError):
     """A ROS message or service type could not be imported."""
 
 
@@ -126,7 +128,7 @@ def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> Transform
     return t
 
 
-class FrameUnknown(LookupError):
+class FrameUnknown(EngineError, LookupError):
     """tf cannot transform a message's frame into the frame a command needs."""
 
     def __init__(self, source: str, target: str, why: str) -> None:

@@ -33,6 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.fast_frames import decode_map
 from airsim_mapper.engine.health import PROBE_METHOD
 
@@ -58,7 +59,7 @@ class FrameCounts:
     oversized: int = 0  # over max_frame_bytes, or an image over its pixel bound
 
 
-class SimLinkError(RuntimeError):
+class SimLinkError(EngineError):
     """A simulator request failed."""
 
 

@@ -17,7 +17,7 @@ def load_and_expand(
     node_name: str,
     namespace: str = "",
 ) -> tuple[Mapping, Scene, tuple[BridgeSpec, ...]]:
-    """Load the mapping, read the scene, expand; raise MappingError or SceneError (both ConfigError)."""
+    """Load the mapping, read the scene, expand; raise MappingError or SceneConfigError (both ConfigError)."""
     mapping = load_mapping(mapping_path)
     scene = read_scene(simconfigpath, scene_file)
     return mapping, scene, expand(mapping, scene, node_name, namespace)

@@ -32,6 +32,7 @@ from functools import lru_cache
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.camera")
@@ -50,7 +51,7 @@ _AMBIENT = np.float32(0.35)
 _FOG_DISTANCE = np.float32(1500.0)
 
 
-class CameraError(ValueError):
+class CameraError(SimServerError, ValueError):
     """Invalid render request (size, field of view or image type)."""
 
 

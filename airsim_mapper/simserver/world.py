@@ -24,6 +24,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from airsim_mapper.simserver.errors import SimServerError
+
 DEFAULT_WORLD_PATH = Path(__file__).with_name("default_world.json")
 SHAPES = ("box", "sphere")
 GROUND_INDEX = -1
@@ -36,7 +38,7 @@ _UP = np.array([0.0, 0.0, -1.0], dtype=np.float32)  # ground normal in NED
 _FACE_NONE, _FACE_GROUND, _FACE_BOX0 = 0, 1, 2
 
 
-class WorldError(ValueError):
+class WorldError(SimServerError, ValueError):
     """A world file is malformed; the message names the file and the offending key."""
 
     def __init__(self, source: str, key: str, problem: str) -> None:
