@@ -13,6 +13,7 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.ros_types import generated_kind
 
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
@@ -23,8 +24,6 @@ class RosTypeError(EngineError, LookupError):
 
 def message_class(ros_type: str, kind: str = "msg") -> type:
     """`pkg/Name` -> the generated class from `pkg.msg` (or `pkg.srv`); only genpy-generated types."""
-    from airsim_mapper.mapping.checks import generated_kind
-
     package, _, name = ros_type.partition("/")
     if generated_kind(ros_type) != ("topic" if kind == "msg" else "service"):
         raise RosTypeError(f"ROS {kind} type {ros_type!r} is not a genpy-generated {kind} type")
