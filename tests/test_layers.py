@@ -22,6 +22,7 @@ LEAVES = frozenset(
         "airsim_mapper.errors",
         "airsim_mapper.geometry",
         "airsim_mapper.image_types",
+        "airsim_mapper.logs",
         "airsim_mapper.ros_types",
         "airsim_mapper.tuning",
     }

@@ -31,8 +31,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.convert.command import shorten
-from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, Throttled, build
+from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, RosToSim, Services, build
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
@@ -42,12 +41,14 @@ from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.errors import ConfigError
+from airsim_mapper.logs import RateLimitedLog, shorten
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.scene import Scene, read_scene
 
 log = logging.getLogger("rosout.airsim_mapper.engine")
+bridge_log = logging.getLogger("rosout.airsim_mapper.bridge")  # sim-time warnings, as the bridges' own
 WATCHDOG_PERIOD_S = 0.05
 STATUS_PERIOD_S = 1.0
 RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)
@@ -56,30 +57,6 @@ REFUSALS_LOGGED, REFUSALS_PERIOD_S = 10, 10.0  # at most this many refused loads
 SHOWN_LINE = 300  # characters of an error line a refusal log shows
 SHUTDOWN_TIMEOUT_S = 5.0  # shutdown's total budget; the simulator gets at most UNSUBSCRIBE_TIMEOUT_S of it
 UNSUBSCRIBE_TIMEOUT_S = 2.0
-
-
-class LogBudget:
-    """Warnings limited to `count` per `period` seconds; the next one logged says how many were held back."""
-
-    def __init__(self, logger: logging.Logger, count: int, period: float) -> None:
-        self.logger, self.count, self.period = logger, count, period
-        self._window_start = -1e9
-        self._logged = 0
-        self._held = 0
-        self._lock = threading.Lock()
-
-    def warn(self, message: str) -> None:
-        with self._lock:
-            now = time.monotonic()
-            if now - self._window_start >= self.period:
-                self._window_start, self._logged = now, 0
-            if self._logged >= self.count:
-                self._held += 1
-                return
-            self._logged += 1
-            held, self._held = self._held, 0
-        suffix = f" ({held} more not logged before this one)" if held else ""
-        self.logger.error("%s%s", message, suffix)
 
 
 class Engine:
@@ -115,7 +92,7 @@ class Engine:
         self.ros = ros or RosLink()
         self.hub = StreamHub(self.sim, self.ros.send_tf)
         self.shared: dict[Any, Any] = {}
-        self.sim_time = SimTimeWatch(warn=Throttled("sim time").warn)
+        self.sim_time = SimTimeWatch(warn=RateLimitedLog(bridge_log, WARN_PERIOD_S, prefix="sim time").warn)
         self.services = Services(
             self.sim,
             self.hub,
@@ -132,7 +109,7 @@ class Engine:
         self._lock = threading.RLock()
         self._scene_requests: queue.Queue[str | None] = queue.Queue(MAX_QUEUED_SCENES)
         self._loading: str | None = None  # the scene file being loaded by the scene-loader thread
-        self._refusals = LogBudget(log, REFUSALS_LOGGED, REFUSALS_PERIOD_S)
+        self._refusals = RateLimitedLog(log, REFUSALS_PERIOD_S, REFUSALS_LOGGED, logging.ERROR)
         self._running = True
         self._client_factory = client_factory
         self.state = CONNECTED
