@@ -32,6 +32,7 @@ from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.names import resolve_namespace
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
@@ -76,8 +77,8 @@ class ProjectAirSimWrapper:
         client: Any = None,
         *,
         address: str = "127.0.0.1",
-        topicsport: int = 8989,
-        servicesport: int = 8990,
+        topicsport: int = TOPICS_PORT,
+        servicesport: int = SERVICES_PORT,
         sim_config_path: str | Path = "sim_config/",
         mapping: Mapping | str | Path = DEFAULT_MAPPING,
         scene: str | None = None,

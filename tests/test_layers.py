@@ -23,6 +23,7 @@ LEAVES = frozenset(
         "airsim_mapper.geometry",
         "airsim_mapper.image_types",
         "airsim_mapper.logs",
+        "airsim_mapper.ports",
         "airsim_mapper.ros_types",
         "airsim_mapper.tuning",
     }

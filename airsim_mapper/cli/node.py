@@ -37,6 +37,7 @@ from airsim_mapper.cli.errors import SettingError
 from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.names import resolve_namespace
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 
 if TYPE_CHECKING:
     from airsim_mapper.mapping.model import BridgeSpec
@@ -58,8 +59,8 @@ class Setting:
 DEFAULT_SIM_CONFIG = "sim_config/"
 SETTINGS = (
     Setting("address", "127.0.0.1", "host running Project AirSim"),
-    Setting("topicsport", 8989, "Project AirSim pub-sub port", int),
-    Setting("servicesport", 8990, "Project AirSim services port", int),
+    Setting("topicsport", TOPICS_PORT, "Project AirSim pub-sub port", int),
+    Setting("servicesport", SERVICES_PORT, "Project AirSim services port", int),
     Setting(
         "simconfigpath",
         DEFAULT_SIM_CONFIG,
