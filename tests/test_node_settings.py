@@ -3,6 +3,7 @@ the launch files agree with the node's SETTINGS and the default ports."""
 
 from __future__ import annotations
 
+import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 
 LAUNCH = Path(__file__).resolve().parent.parent / "launch"
+SIM_CONFIG = Path(__file__).resolve().parent.parent / "sim_config"
 # launch defaults that differ from the node's on purpose: roslaunch finds the package's own sim_config
 LAUNCH_OWN_DEFAULTS = {"simconfigpath": "$(find projectairsim_ros)/sim_config"}
 
@@ -99,3 +101,35 @@ def test_every_launch_file_defaults_to_the_default_ports(name: str) -> None:
     args, _params = launch_args(name)
     ports = (args.get("topicsport"), args.get("servicesport"))
     assert ports == (str(TOPICS_PORT), str(SERVICES_PORT))
+
+
+def test_the_node_knows_its_final_name_before_init_node_as_rospy_will_make_it() -> None:
+    from airsim_mapper.cli.node import node_identity
+
+    name, namespace = node_identity(None, ["node.py"])
+    assert name.startswith(f"projectairsim_{os.getpid()}_") and namespace == "/"
+    assert node_identity("bridge", ["node.py"])[0] == "bridge"
+    assert node_identity("bridge", ["node.py", "__name:=renamed", "__ns:=/fleet"]) == ("renamed", "/fleet/")
+
+
+def test_the_start_scene_is_read_and_expanded_once_when_the_final_name_is_the_early_one(monkeypatch) -> None:
+    from airsim_mapper.cli.node import prepare
+    from airsim_mapper.mapping import pipeline
+
+    calls = {"expand": 0, "read_scene": 0}
+
+    def counted(name, real):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return real(*args, **kwargs)
+
+        return call
+
+    monkeypatch.setattr(pipeline, "expand", counted("expand", pipeline.expand))
+    monkeypatch.setattr(pipeline, "read_scene", counted("read_scene", pipeline.read_scene))
+    settings = {"mapping": "default", "scene": "scene_basic_drone.jsonc", "simconfigpath": str(SIM_CONFIG)}
+    early = prepare(settings, "projectairsim_1_2", "")
+    final = prepare(settings, "projectairsim_1_2", "", early)
+    assert final.specs is early.specs and calls == {"expand": 1, "read_scene": 1}
+    renamed = prepare(settings, "other", "", early)  # a __name:= the early look could not know
+    assert renamed.scene is early.scene and calls == {"expand": 2, "read_scene": 1}
