@@ -82,6 +82,11 @@ def _e(message: Mapping[str, Any], **context: Any) -> Example:
 STAMP = {"time_stamp": 1}
 POSE = {"position": {"x": 1.0, "y": 2.0, "z": 3.0}, "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}}
 ORIGIN = {"xyz": "1 2 -3", "rpy-deg": "0 0 90"}  # a robot actor's origin in a scene
+# a 1x1 PNG of one black pixel, as the simulator sends a compressed colour image
+PNG_1X1 = bytes.fromhex(
+    "89504e470d0a1a0a0000000d4948445200000001000000010802000000907753de"
+    "0000000a49444154081d63000200000400010d3ba4b90000000049454e44ae426082"
+)
 
 
 CONVERTERS: dict[str, ConverterInfo] = {
@@ -157,6 +162,18 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "image",
             "sim Image (BGR, PNG, 16FC1, 16UC1, GRAY8) -> Image (bgr8, 32FC1 metres, mono8)",
             example=_e({**STAMP, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)}),
+            max_pixels=True,
+        ),
+        _c(
+            "compressed_image",
+            SIM_TO_ROS,
+            ["sensor_msgs/CompressedImage"],
+            PUBLISH,
+            "compressed_image",
+            "compressed_image",
+            "sim Image sent as PNG (capture setting compress: true) -> CompressedImage of those bytes, "
+            "format 'bgr8; png compressed bgr8' (image_transport's compressed transport)",
+            example=_e({**STAMP, "width": 1, "height": 1, "encoding": "PNG", "data": PNG_1X1}),
             max_pixels=True,
         ),
         _c(
