@@ -93,10 +93,16 @@ class Bridge:
     def stop(self) -> None:
         raise NotImplementedError
 
-    def fail(self, message: str) -> None:
+    def fail(self, message: str, exc: BaseException | None = None) -> None:
+        """Count a bridge error and log it (rate-limited); `exc`, an unexpected exception, with its
+        traceback."""
         self.stats.errors += 1
         self.stats.last_error = message
-        self.warn(message)
+        self.warn(message, exc)
+
+    def failed(self, what: str, exc: BaseException) -> None:
+        """An exception no converter should raise (a bug): a bridge error, logged with its traceback."""
+        self.fail(f"{what}: {type(exc).__name__}: {exc}", exc)
 
 
 class SimToRos(Bridge):
@@ -167,6 +173,9 @@ class SimToRos(Bridge):
             if isinstance(exc, OversizedData):
                 self.services.counts.oversized += 1
             self.fail(f"dropped a message from {self.topic}: {exc}")
+            return None
+        except Exception as exc:  # the stream and the node go on
+            self.failed(f"converting a message from {self.topic} failed", exc)
             return None
         if out is None:
             return None
@@ -258,6 +267,9 @@ class RosToSim(Bridge):
         except ConversionError as exc:
             self.fail(f"rejected a message on {self.spec.ros}: {exc}")
             return
+        except Exception as exc:  # the node never dies from one bad message
+            self.failed(f"converting a message on {self.spec.ros} failed", exc)
+            return
         spec, runner = self.spec, self.info.runner
         self.last_message = time.monotonic()
         try:
@@ -347,6 +359,9 @@ class RosService(Bridge):
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
             return _fill(response, False, str(exc))
+        except Exception as exc:  # answered as a failure, not as a broken service
+            self.failed(f"{self.spec.ros}: the request failed", exc)
+            return _fill(response, False, f"{type(exc).__name__}: {exc}")
         self.stats.messages += 1
         self.after_call(params, result)
         return _fill(response, _accepted(result), "" if isinstance(result, bool) else str(result))

@@ -56,8 +56,9 @@ class FrameCounts:
     """Simulator frames the bridge refused, kept by the engine across reconnects (status, /diagnostics)."""
 
     max_frame_bytes: int = int(MAX_FRAME_MB * 1024 * 1024)
-    bad: int = 0  # undecodable, of an unknown type, or a callback failed
+    bad: int = 0  # undecodable, or of an unknown type
     oversized: int = 0  # over max_frame_bytes, or an image over its pixel bound
+    callback_errors: int = 0  # a callback on the receive thread raised (the frame itself was fine)
 
 
 class SimLinkError(EngineError):
@@ -155,8 +156,9 @@ class SimLink:
         for callback in entry["callbacks"]:
             try:
                 callback(info, message)
-            except Exception as exc:
-                self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
+            except Exception as exc:  # not a bad frame: the callback's own bug, told with its traceback
+                self.counts.callback_errors += 1
+                self._warn(f"{topic}: a callback failed: {type(exc).__name__}: {exc}", exc)
 
     def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
         message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))

@@ -232,6 +232,7 @@ class Supervisor:
             **self.counters,
             "bad_frames": engine.frame_counts.bad,
             "oversized_frames": engine.frame_counts.oversized,
+            "callback_errors": engine.frame_counts.callback_errors,
             "sim_time_jumps_back": engine.sim_time.jumps_back,
             "sim_time_last_jump_back_s": round(engine.sim_time.last_jump_s, 3),
             "gc_max_ms": engine.gc_pauses.take_peak_ms(),

@@ -82,3 +82,18 @@ def test_the_counts_outlive_a_link():
     receive([frame({"n": 1})], counts)
     receive([frame({"n": 1})], counts)
     assert counts.oversized == 2
+
+
+def test_a_failing_callback_is_no_bad_frame_and_is_logged_with_its_traceback(caplog):
+    counts = FrameCounts()
+
+    def failing(_info, _message):
+        raise KeyError("the callback's own bug")
+
+    client = Client([frame({"n": 1}), frame({"n": 2})], failing)
+    link = SimLink(client, counts)
+    client.recv_topic_thread.join(timeout=5)
+    link.stop_loop()
+    assert (counts.callback_errors, counts.bad) == (2, 0)
+    logged = [r for r in caplog.records if "a callback failed" in r.getMessage()]
+    assert len(logged) == 1 and logged[0].exc_info[0] is KeyError  # the second held back (rate limit)
