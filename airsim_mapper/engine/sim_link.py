@@ -72,6 +72,45 @@ class SimLinkDead(SimLinkError):
         super().__init__(f"{what}: the simulator connection is lost")
 
 
+class LinkState:
+    """A link's connection state, owned here and changed under its own lock (a leaf lock: nothing else is
+    taken while it is held). NNG's callback thread drops it, the supervisor kills it, shutdown closes it,
+    and every thread that sends asks it first."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._dropped = False  # a connection dropped at least once
+        self._dead = False  # every call fails at once; subscriptions are only remembered
+        self._closing = False  # unsubscribes are collected for `close`
+
+    def drop(self) -> None:
+        with self._lock:
+            self._dropped = True
+
+    def kill(self) -> None:
+        with self._lock:
+            self._dead = True
+
+    def begin_close(self) -> None:
+        with self._lock:
+            self._closing = True
+
+    @property
+    def dead(self) -> bool:
+        with self._lock:
+            return self._dead
+
+    @property
+    def closing(self) -> bool:
+        with self._lock:
+            return self._closing
+
+    def connected(self) -> bool:
+        """Neither dead nor ever dropped, read together."""
+        with self._lock:
+            return not self._dead and not self._dropped
+
+
 class SimLink:
     """Reference-counted topic subscriptions and concurrent service calls on a shared client."""
 
@@ -83,9 +122,7 @@ class SimLink:
         self._loop = asyncio.new_event_loop()
         self._loop_thread = threading.Thread(target=self._run_loop, name="sim-requests", daemon=True)
         self._loop_thread.start()
-        self.dropped = threading.Event()  # a connection dropped at least once
-        self.dead = False
-        self._closing = False
+        self.connection = LinkState()  # dropped, dead, closing: one lock of its own
         self._pending: set[str] = set()  # topics to unsubscribe when closing
         self._watched = [
             sock
@@ -180,11 +217,16 @@ class SimLink:
     # --- liveness ---------------------------------------------------------------------------
     def _on_pipe_removed(self, _pipe: Any) -> None:
         """NNG callback thread: the server closed a connection (died, restarted, or dropped us)."""
-        self.dropped.set()
+        self.connection.drop()
+
+    @property
+    def dead(self) -> bool:
+        """Marked dead: every call fails at once (see LinkState)."""
+        return self.connection.dead
 
     def connected(self) -> bool:
         """The topics connection never dropped since this link was made."""
-        return not self.dead and not self.dropped.is_set()
+        return self.connection.connected()
 
     def probe(self, timeout: float) -> bool:
         """One cheap request: did the server answer within `timeout` seconds?"""
@@ -196,7 +238,7 @@ class SimLink:
 
     def mark_dead(self) -> None:
         """From now on every call fails at once; subscriptions are only remembered."""
-        self.dead = True
+        self.connection.kill()
 
     # --- topics -----------------------------------------------------------------------------
     def subscribe(self, topic: str, callback: TopicCallback) -> None:
@@ -225,7 +267,7 @@ class SimLink:
             entry["callbacks"] = [cb for cb in callbacks if cb != callback]
             if entry["callbacks"]:
                 return False
-            if self._closing:
+            if self.connection.closing:
                 self._pending.add(topic)
                 return False
             return True
@@ -328,7 +370,7 @@ class SimLink:
 
     def begin_close(self) -> None:
         """From now on unsubscribes are collected for `close` instead of sent one by one."""
-        self._closing = True
+        self.connection.begin_close()
 
     def close(self, timeout: float = 10.0, client_topics: bool = False) -> bool:
         """Remove every callback of ours from the client, tell the server in one request (waiting at most
