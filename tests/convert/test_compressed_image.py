@@ -92,7 +92,7 @@ SIM = "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/scene_camera"
 
 def test_the_documented_rule_publishes_the_png_and_counts_raw_pixels_as_bridge_errors():
     """The mapping of docs/converters.md, run by the engine's own runners on the fake links."""
-    from fakes import FakeRos, FakeSim
+    from fakes import FakeRos, FakeSimLink
     from harness import SIM_CONFIG, wait_until
 
     from airsim_mapper.engine.bridges import Services, build
@@ -106,7 +106,7 @@ def test_the_documented_rule_publishes_the_png_and_counts_raw_pixels_as_bridge_e
     specs = expand(mapping, read_scene(SIM_CONFIG, "scene_drone_sensors.jsonc"), "projectairsim")
     spec = next(spec for spec in specs if spec.ros == ROS)
     assert (spec.sim, spec.ros_type, spec.options.lazy) == (SIM, "sensor_msgs/CompressedImage", True)
-    sim, ros = FakeSim(), FakeRos()
+    sim, ros = FakeSimLink(), FakeRos()
     bridge = build(spec, Services(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda *_: None))
     bridge.start()
     assert SIM not in sim.subscriptions  # lazy: nothing from the simulator without a subscriber

@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 
 import pytest
-from fakes import IMU_MESSAGE, FakeRos, FakeSim
+from fakes import IMU_MESSAGE, FakeRos, FakeSimLink
 from geometry_msgs.msg import PoseStamped, Twist
 from harness import SIM_CONFIG, wait_until
 from std_msgs.msg import String
@@ -31,8 +31,8 @@ def spec_of(specs, prefix: str):
 
 
 @pytest.fixture
-def sim() -> FakeSim:
-    return FakeSim()
+def sim() -> FakeSimLink:
+    return FakeSimLink()
 
 
 @pytest.fixture
@@ -41,7 +41,7 @@ def ros() -> FakeRos:
 
 
 @pytest.fixture
-def services(sim: FakeSim, ros: FakeRos) -> Services:
+def services(sim: FakeSimLink, ros: FakeRos) -> Services:
     actions: list[tuple[str, dict]] = []
     found = Services(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda a, p: actions.append((a, p)))
     found.actions = actions  # type: ignore[attr-defined]
