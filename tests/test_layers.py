@@ -287,3 +287,50 @@ def test_a_circle_is_reported_and_type_checking_imports_are_not_run_time_ones() 
     source = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from a import b\nelse:\n    import c\n"
     assert imported(source, "m", run_time_only=True) == {"typing", "typing.TYPE_CHECKING", "c"}
     assert {"a", "a.b", "c"} <= imported(source, "m")
+
+
+FACES = ("airsim_mapper.cli", "airsim_mapper.convert", "airsim_mapper.engine", "airsim_mapper.mapping")
+
+
+def face(package: str) -> frozenset[str]:
+    """The modules a subpackage's `__init__` names in `__all__`."""
+    source = (PACKAGE.parent / package.replace(".", "/") / "__init__.py").read_text(encoding="utf-8")
+    for node in ast.parse(source).body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets):
+            return frozenset(ast.literal_eval(node.value))
+    return frozenset()
+
+
+def face_problems(graph: dict[str, set[str]]) -> list[str]:
+    """Imports from outside a subpackage of a module its `__all__` does not name."""
+    problems = []
+    for package in FACES:
+        allowed = face(package)
+        for module, targets in graph.items():
+            if in_layer(module, package):
+                continue
+            problems.extend(
+                f"{module} imports {target}, not in {package}.__all__"
+                for target in targets
+                if in_layer(target, package)
+                and target != package
+                and target[len(package) + 1 :].split(".")[0] not in allowed
+            )
+    return sorted(problems)
+
+
+@pytest.mark.parametrize("package", FACES)
+def test_each_subpackage_names_its_face_and_every_outside_import_uses_it(package: str) -> None:
+    names = face(package)
+    assert names, f"{package}/__init__.py has no __all__"
+    modules = {name.rsplit(".", 1)[-1] for name in parsed_package() if name.startswith(f"{package}.")}
+    assert sorted(names - modules) == [], "__all__ names modules that do not exist"
+    assert [p for p in face_problems(package_graph()) if f"not in {package}." in p] == []
+
+
+def test_an_import_behind_a_subpackages_face_is_reported() -> None:
+    graph = package_graph()
+    graph["airsim_mapper.wrapper"] |= {"airsim_mapper.engine.streams"}
+    assert face_problems(graph) == [
+        "airsim_mapper.wrapper imports airsim_mapper.engine.streams, not in airsim_mapper.engine.__all__"
+    ]
