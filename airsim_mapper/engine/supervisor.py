@@ -24,9 +24,9 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from airsim_mapper.engine.bridges import RosToSim
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
+from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 

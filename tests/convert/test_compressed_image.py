@@ -95,8 +95,9 @@ def test_the_documented_rule_publishes_the_png_and_counts_raw_pixels_as_bridge_e
     from fakes import FakeRos, FakeSimLink
     from harness import SIM_CONFIG, wait_until
 
-    from airsim_mapper.engine.bridges import Services, build
+    from airsim_mapper.engine.bridges import Services
     from airsim_mapper.engine.hub import StreamHub
+    from airsim_mapper.engine.runners import build
     from airsim_mapper.mapping.expand import expand
     from airsim_mapper.mapping.loader import load_mapping_text
     from airsim_mapper.scene import read_scene

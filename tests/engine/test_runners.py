@@ -13,8 +13,10 @@ from std_msgs.msg import String
 from std_srvs.srv import TriggerRequest
 
 from airsim_mapper.convert.pose import camera_pose_key
-from airsim_mapper.engine.bridges import RosService, RosToSim, Services, SimToRos, StreamingImage, build
+from airsim_mapper.engine.bridges import Services, SimToRos, StreamingImage
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.ros_to_sim import RosService, RosToSim
+from airsim_mapper.engine.runners import build
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.scene import read_scene

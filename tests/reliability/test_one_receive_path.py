@@ -34,7 +34,7 @@ def test_the_bridge_receive_loop_runs_and_survives_a_malformed_frame(
     line = next(x for x in mission.output().splitlines() if x.startswith("RESULT "))
     result = json.loads(line.removeprefix("RESULT "))
     stack = result["receive_stack"]
-    assert "airsim_mapper.engine.sim_link.receive" in stack, stack
+    assert "airsim_mapper.engine.receive.receive" in stack, stack
     if order == "world-first":  # the client's own thread, now running the bridge's loop
         assert "projectairsim.client.__recv_topic" in stack and result["receive_thread"] != "sim-receive"
     else:
