@@ -7,7 +7,9 @@ own group of it) or a lower one. Every module of the package is in exactly one l
   package, is rospy, genpy, a message package or another ROS library;
 - convert/ does not import rospy (message classes and genpy.Time only);
 - nothing in the package imports the tools;
-- the package's run-time imports (those outside `if TYPE_CHECKING:`) have no circle.
+- the package's run-time imports (those outside `if TYPE_CHECKING:`) have no circle;
+- from outside a subpackage (cli, convert, engine, mapping), only the modules its `__all__` names are
+  imported.
 Each rule has a self-test: an import injected against it is reported.
 """
 
