@@ -424,7 +424,9 @@ def renderer() -> GLRenderer:
 
 
 def render(world: World, *args: Any) -> dict[int, camera.RenderedImage]:
-    """`camera.render` with OpenGL in this process's context; one render at a time per process."""
+    """`camera.render` with OpenGL in this process's context; one render at a time per process.
+
+    A changing world is rendered as it is now (its GL buffers are kept per World, which never changes)."""
     gl = renderer()
     with _LOCK:
-        return gl.render(world, *args)
+        return gl.render(world.current, *args)

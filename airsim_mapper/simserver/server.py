@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from airsim_mapper.simserver.objects import LiveWorld
 from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
 from airsim_mapper.simserver.scene import SceneError, SceneSpec, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
@@ -67,7 +68,7 @@ class SimServer:
 
     def __init__(self, options: ServerOptions) -> None:
         self.options = options
-        self.world = load_world(options.world_path)
+        self.world = LiveWorld(load_world(options.world_path))  # objects move, appear and vanish at run time
         nice = options.render_nice
         self.render_worker = RenderWorker(self.world, nice) if nice is not None else None
         self.table = MethodTable()

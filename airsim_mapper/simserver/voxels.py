@@ -7,9 +7,12 @@ east, up), so k counts upwards. Cell (i, j, k) is element `i + nx * (k + nz * j)
 booleans it returns; the client's `AStarPlanner.get_grid_idx` and `utils.get_voxel_grid_idx` read it so.
 The rotation of `position` is not used.
 
-A cell is occupied when its cube overlaps a collidable object (its interior, not just a face) or reaches
-below the ground plane, which counts as solid. Robots and env actors are not in the grid; objects named
-in `actors_to_ignore` are left out. Everything is vectorised over the cells near each object.
+A cell is occupied when its cube overlaps a collidable object (its interior, not just a face) or straddles
+the ground plane. The ground is a surface, as in every other sense of this server: the cells below it are
+free, as under the real server's floor mesh. The client relies on that: `generate_intercept_trajectory`
+centres its grid at the negated (up) height, below the ground, and plans in the grid as if it were at
+the right height. Robots and env actors are not in the grid; objects named in `actors_to_ignore` are
+left out. Everything is vectorised over the cells near each object.
 """
 
 from __future__ import annotations
@@ -70,7 +73,7 @@ def occupancy(
     north, east, down = cell_centres(np.asarray(center, dtype=float), shape, res)
     half = res / 2.0
     occupied = np.zeros((shape[1], shape[2], shape[0]), dtype=bool)  # [j, k, i]: C order is the real layout
-    occupied[:, down + half > _TOUCH, :] = True  # the ground plane z = 0 and everything below it
+    occupied[:, np.abs(down) < half - _TOUCH, :] = True  # the cubes the ground plane z = 0 cuts
     skip = set(ignore)
     for obj in world.objects:
         if not obj.collidable or obj.name in skip:

@@ -41,8 +41,8 @@ def occupied(world: World, ned, **kwargs) -> bool:
 def test_the_layout_is_the_real_servers_and_the_clients_helpers_read_it():
     world = one("box", center=[3, -2, -5], size=[1, 1, 1])
     cells = grid(world)
-    # 11 layers reach below the ground (up -10 .. 0, the last one from -0.5 up to 0.5), and one box cell
-    assert len(cells) == 20**3 and sum(cells) == 20 * 20 * 11 + 1
+    # the layer the ground cuts (up 0: from -0.5 to 0.5), and one box cell
+    assert len(cells) == 20**3 and sum(cells) == 20 * 20 + 1
     # cell (i, j, k) centred at (i - 10, j - 10, up k - 10) is element i + 20 * (k + 20 * j)
     i, j, k = 3 + 10, -2 + 10, 5 + 10
     assert cells[i + 20 * (k + 20 * j)] is True
@@ -50,13 +50,13 @@ def test_the_layout_is_the_real_servers_and_the_clients_helpers_read_it():
     assert cells[get_voxel_grid_idx([3, -2, -6], [0, 0, 0], (20, 20, 20), 1)] is False
 
 
-def test_the_ground_is_solid_and_a_cube_resting_on_it_is_free():
+def test_the_ground_is_a_surface_occupying_the_cells_it_cuts():
     world = World([])
     assert occupied(world, (0, 0, -1)) is False  # the cube spans z -1.5 .. -0.5
-    assert occupied(world, (0, 0, 0)) is True  # -0.5 .. 0.5 reaches below the ground
-    assert occupied(world, (4, 4, 5)) is True
-    at_half = grid(World([]), size=20, res=1.0, center=(0.0, 0.0, -0.5))  # cubes from z = 0 up: all free
-    assert sum(at_half) == 20 * 20 * 10
+    assert occupied(world, (0, 0, 0)) is True  # -0.5 .. 0.5: the ground cuts it
+    assert occupied(world, (4, 4, 5)) is False  # below the ground, as under the real server's floor
+    at_half = grid(World([]), size=20, res=1.0, center=(0.0, 0.0, -0.5))  # cubes touch z = 0: all free
+    assert sum(at_half) == 0
 
 
 def test_a_cube_that_only_touches_a_face_is_free():
