@@ -1,8 +1,9 @@
 """The scene's objects by name: the world file's solids, objects spawned at run time, and their poses.
 
 The scene-level methods of the real server's `WorldSimApi` (Unreal plugin) that name objects: `ListObjects`,
-`ListAssets`, `GetObjectPose`, `GetObjectPoses`, `SetObjectPose`, `SpawnObject`, `spawnObjectFromFile`,
-`DestroyObject`, `DestroyAllSpawnedObjects` and `createVoxelGrid` (`voxels.py`). Unreal's actors are here
+`ListAssets`, `GetObjectPose`, `GetObjectPoses`, `SetObjectPose`, `SpawnObject`, `spawnObjectAtGeo`,
+`spawnObjectFromFile`, `spawnObjectFromFileAtGeo`, `DestroyObject`, `DestroyAllSpawnedObjects` and
+`createVoxelGrid` (`voxels.py`). Unreal's actors are here
 the world's objects, the scene's robots and its env actors; only world objects move, appear and vanish
 through these methods (a robot or env actor is moved by its own API).
 
@@ -26,6 +27,7 @@ import numpy as np
 
 from airsim_mapper.geometry import IDENTITY_Q, quat_conjugate, quat_from_rpy, quat_multiply, rotate, yaw_of
 from airsim_mapper.simserver import gltf, messages, voxels
+from airsim_mapper.simserver.scene import DEFAULT_HOME, geo_to_ned
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.world import World, WorldObject
 
@@ -153,11 +155,18 @@ def pose_result(pose: Pose) -> dict[str, Any]:
 
 
 class SceneObjects:
-    """The objects of one scene; `actors()` gives the pose of every robot and env actor by name."""
+    """The objects of one scene; `actors()` gives the pose of every robot and env actor by name; `home` is
+    the scene's home geo point (latitude, longitude, altitude) for the spawns at geo points."""
 
-    def __init__(self, world: LiveWorld, actors: Callable[[], dict[str, Pose]]) -> None:
+    def __init__(
+        self,
+        world: LiveWorld,
+        actors: Callable[[], dict[str, Pose]],
+        home: tuple[float, float, float] = DEFAULT_HOME,
+    ) -> None:
         self.world = world
         self.actors = actors
+        self.home = home
         self._lock = threading.Lock()
         self._placed = {o.name: Placed.of(o) for o in world.base.objects}
         world.reset()
@@ -224,6 +233,29 @@ class SceneObjects:
     def _free_segmentation_id(self) -> int:
         used = {p.segmentation_id for p in self._placed.values()} | {self.world.base.ground_segmentation_id}
         return next((i for i in range(1, 256) if i not in used), 255)
+
+    def _at_geo(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The params of a spawn at a geo point with the pose it stands for (NED from the home point)."""
+        geo = [params[k] for k in ("latitude", "longitude", "altitude")]
+        rotation = params["rotation"]
+        numbers = [*geo, *(rotation if isinstance(rotation, list) else [None])]
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in numbers) or len(numbers) != 7:
+            raise ServiceError(
+                f"latitude, longitude, altitude must be numbers and rotation [w, x, y, z], got {numbers!r}",
+                code=2.0,
+            )
+        north, east, down = geo_to_ned(tuple(float(v) for v in geo), self.home)  # type: ignore[arg-type]
+        pose = {
+            "translation": {"x": north, "y": east, "z": down},
+            "rotation": dict(zip("wxyz", (float(v) for v in rotation))),
+        }
+        return {**params, "pose": pose}
+
+    def spawn_asset_at_geo(self, params: Mapping[str, Any]) -> str:
+        return self.spawn_asset(self._at_geo(params))
+
+    def spawn_from_file_at_geo(self, params: Mapping[str, Any]) -> str:
+        return self.spawn_from_file(self._at_geo(params))
 
     def _spawn(self, params: Mapping[str, Any], shape: str, minimum, maximum, color) -> str:
         position, orientation = _pose(params["pose"])
@@ -292,6 +324,8 @@ class SceneObjects:
 
     def methods(self, prefix: str) -> list[Method]:
         spawn = ("object_name", "pose", "scale", "enable_physics")
+        geo = ("object_name", "latitude", "longitude", "altitude", "rotation", "scale", "enable_physics")
+        from_file = ("file_format", "byte_array", "is_binary")
         return [
             Method(f"{prefix}/ListObjects", ("name",), self.list_objects),
             Method(f"{prefix}/ListAssets", ("name",), self.list_assets),
@@ -299,11 +333,9 @@ class SceneObjects:
             Method(f"{prefix}/GetObjectPoses", ("object_names",), self.get_poses),
             Method(f"{prefix}/SetObjectPose", ("object_name", "pose", "teleport"), self.set_pose),
             Method(f"{prefix}/SpawnObject", ("asset_path", *spawn), self.spawn_asset),
-            Method(
-                f"{prefix}/spawnObjectFromFile",
-                ("file_format", "byte_array", "is_binary", *spawn),
-                self.spawn_from_file,
-            ),
+            Method(f"{prefix}/spawnObjectAtGeo", ("asset_path", *geo), self.spawn_asset_at_geo),
+            Method(f"{prefix}/spawnObjectFromFile", (*from_file, *spawn), self.spawn_from_file),
+            Method(f"{prefix}/spawnObjectFromFileAtGeo", (*from_file, *geo), self.spawn_from_file_at_geo),
             Method(f"{prefix}/DestroyObject", ("object_name",), self.destroy),
             Method(f"{prefix}/DestroyAllSpawnedObjects", (), self.destroy_spawned),
             Method(f"{prefix}/createVoxelGrid", voxels.VOXEL_GRID_PARAMS, self.voxel_grid),

@@ -96,7 +96,7 @@ class Session:
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
         self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories, self.clock.now_ns())
-        self.objects = SceneObjects(self.world, self._actor_poses)
+        self.objects = SceneObjects(self.world, self._actor_poses, spec.home_geo)
         self.visuals = VisualSettings(self._set_wind)
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns

@@ -178,3 +178,24 @@ def test_a_new_scene_starts_from_the_world_file(scene):
     assert world.current is not world.base
     SceneObjects(world, dict)
     assert world.current is world.base and world.object_named("OrangeBall").center.tolist() == [20, 20, -3]
+
+
+def test_spawns_at_a_geo_point_are_placed_from_the_home_point(scene):
+    world, objects = scene
+    lat, lon, alt = objects.home
+    params = {
+        "object_name": "Marker",
+        "asset_path": "Sphere",
+        "latitude": lat + 1e-4,
+        "longitude": lon,
+        "altitude": alt + 5.0,
+        "rotation": [1.0, 0.0, 0.0, 0.0],
+        "scale": [2.0, 2.0, 2.0],
+        "enable_physics": False,
+    }
+    assert objects.spawn_asset_at_geo(params) == "Marker"
+    marker = world.object_named("Marker")
+    assert marker.shape == "sphere" and marker.radius == pytest.approx(1.0)
+    assert marker.center == pytest.approx([11.13, 0.0, -5.0], abs=0.01)
+    with pytest.raises(ServiceError, match="rotation"):
+        objects.spawn_asset_at_geo({**params, "rotation": [1.0, 0.0]})
