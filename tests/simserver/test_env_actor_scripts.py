@@ -8,7 +8,7 @@ import json
 import pytest
 
 from airsim_mapper.simserver.env_actors import EnvActors
-from airsim_mapper.simserver.scene import SceneError, parse_scene
+from airsim_mapper.simserver.scene_spec import SceneSpecError, parse_scene
 from airsim_mapper.simserver.session import TrajectoryStore
 
 SCRIPT = {
@@ -82,7 +82,7 @@ def test_an_actor_without_a_script_stays_at_its_origin():
 def test_a_malformed_script_is_refused_at_scene_load_naming_the_key(change, problem):
     script = copy.deepcopy(SCRIPT)
     change(script)
-    with pytest.raises(SceneError, match=problem) as err:
+    with pytest.raises(SceneSpecError, match=problem) as err:
         parse_scene(scene(script))
     assert "environment actor 'Scripted'" in str(err.value)
 
