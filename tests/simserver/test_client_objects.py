@@ -12,7 +12,7 @@ import struct
 import pytest
 from projectairsim import Drone, EnvActor, World
 from projectairsim.planners import AStarPlanner
-from projectairsim.types import ImageType, Pose
+from projectairsim.types import Pose
 from projectairsim.utils import unpack_image
 
 from simserver.clientkit import load_world, scene_config, subscribe
@@ -79,11 +79,14 @@ def test_a_spawned_gltf_model_is_seen_by_the_camera_and_in_the_voxel_grid(client
     world = load_world(client, "scene_drone_sensors.jsonc")
     drone = Drone(client, world, "Drone1")
     drone.set_pose(pose(0.0, 60.0, -20.0), True)  # over open ground
+    world.pause()  # lock-step: every image due in a step is rendered before the step replies
+    inbox = subscribe(client, drone.sensors["DownCamera"]["depth_planar_camera"])
 
     def centre_depth() -> float:
-        image = drone.get_images("DownCamera", [ImageType.DEPTH_PLANAR])[ImageType.DEPTH_PLANAR]
-        pixels = unpack_image(image)
-        return float(pixels[image["height"] // 2, image["width"] // 2])
+        inbox.messages.clear()
+        world.continue_for_sim_time(200_000_000, wait_until_complete=True)
+        image = inbox.wait_for(timeout=30.0)[-1]
+        return float(unpack_image(image)[image["height"] // 2, image["width"] // 2])
 
     before = centre_depth()
     name = world.spawn_object_from_file(
