@@ -9,8 +9,9 @@ through these methods (a robot or env actor is moved by its own API).
 
 The world the sensors see changes with them: `LiveWorld` stands for the server's `World` everywhere and
 answers from the newest one. Each change builds a new immutable `World` from the objects' poses and
-swaps it in with one assignment, so a reader (a ray cast, a render) always works on one consistent
-world. A new scene starts again from the world file.
+swaps it in with one assignment, so each call (a ray cast, a collision) works on one consistent world;
+a reader that makes several calls for one sample (a render, a radar scan, annotations) takes
+`world.current` once. A new scene starts again from the world file.
 """
 
 from __future__ import annotations
