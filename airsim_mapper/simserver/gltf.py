@@ -20,12 +20,14 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.simserver.errors import SimServerError
+
 GLB_MAGIC = b"glTF"
 GLB_JSON_CHUNK = 0x4E4F534A
 DEFAULT_COLOR_BGR = (200, 200, 200)  # glTF's default material is white; a light grey keeps shading visible
 
 
-class GltfError(ValueError):
+class GltfError(SimServerError, ValueError):
     """The bytes are not a glTF 2.0 model this server can take the bounds of."""
 
 
