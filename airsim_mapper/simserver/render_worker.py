@@ -9,13 +9,14 @@ does.
 
 The child is `python -m airsim_mapper.simserver.render_worker FD NICE BUFFER_FD`: it reads requests from
 one end of a socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first
-message is the World; each request is a RenderRequest with the size of the shared image buffer; each
-answer is a small dict of the images made (type -> encoding, width, height), or the CameraError it
-raised. The pixels themselves go through the shared buffer (a memfd both processes map): the child
-renders straight into it at the request's `layout`, and the server packs each image from there into its
-topics frame (a render's images are views of the buffer, valid until the next render). Through the
-socket, a 1280x720 frame of all seven types (17.5 MB) was pickled, sent, received and unpickled: four
-copies and about half of the server's CPU time per frame.
+message is the World, and a World sent later (objects moved, spawned or destroyed) replaces it without an
+answer; each request is a RenderRequest with the size of the shared image buffer; each answer is a small
+dict of the images made (type -> encoding, width, height), or the CameraError it raised. The pixels
+themselves go through the shared buffer (a memfd both processes map): the child renders straight into it
+at the request's `layout`, and the server packs each image from there into its topics frame (a render's
+images are views of the buffer, valid until the next render). Through the socket, a 1280x720 frame of all
+seven types (17.5 MB) was pickled, sent, received and unpickled: four copies and about half of the
+server's CPU time per frame.
 
 The child renders with `rendering.render`, so with OpenGL by default: its EGL context and llvmpipe's threads
 live in the child, at its priority, made on its first render (docs/rendering.md).
@@ -45,6 +46,7 @@ from pathlib import Path
 
 from airsim_mapper.simserver import rendering
 from airsim_mapper.simserver.camera_model import CameraError, RenderedImage, RenderRequest
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.render_worker")
@@ -54,7 +56,7 @@ AUTOGROUP = Path("/proc/self/autogroup")
 ANSWER_TIMEOUT_S = 10.0  # a render slower than this counts as a hung worker
 
 
-class RenderWorkerError(RuntimeError):
+class RenderWorkerError(SimServerError, RuntimeError):
     """The render process could not be started or stopped answering."""
 
 
@@ -71,6 +73,7 @@ class RenderWorker:
         self._closed = False
         self._answered = False  # the current child has answered at least once
         self._in_process = False  # set for good when a new child fails before its first answer
+        self._sent: World | None = None  # the world the current child renders
         self._buffer_fd: int | None = None  # the shared image buffer (a memfd), made with the first child
         self._buffer: mmap.mmap | None = None
         self._buffer_size = 0
@@ -90,9 +93,12 @@ class RenderWorker:
             if self._closed:
                 raise RenderWorkerError("the render worker is closed")
             if self._in_process:
-                return rendering.render(self.world, request)
+                return rendering.render(self.world.current, request)
             try:
                 conn = self._connection()
+                if self._sent is not self.world.current:
+                    self._sent = self.world.current
+                    conn.send(self._sent)
                 buffer = self._shared_buffer(request.nbytes)
                 conn.send((request, self._buffer_size))
                 if not conn.poll(ANSWER_TIMEOUT_S):
@@ -108,7 +114,7 @@ class RenderWorker:
                     raise RenderWorkerError(f"render worker failed ({reason})") from exc
                 LOG.error("the render worker does not start (%s); rendering in the server process", reason)
                 self._in_process = True
-                return rendering.render(self.world, request)
+                return rendering.render(self.world.current, request)
             self._answered = True
         if isinstance(answer, Exception):
             raise answer
@@ -165,7 +171,8 @@ class RenderWorker:
         self.starts += 1
         self._answered = False
         self._conn = Connection(ours.detach())
-        self._conn.send(self.world)
+        self._sent = self.world.current
+        self._conn.send(self._sent)
         return self._conn
 
     def _discard(self) -> None:
@@ -243,15 +250,20 @@ def set_autogroup_nice(path: Path, nice: int, attempts: int = 20, pause_s: float
 
 
 def serve(conn: Connection, nice: int, buffer_fd: int) -> None:
-    """The child's loop: the world first, then one answer per request until end of file."""
+    """The child's loop: the world first, then one answer per request until end of file (a new world
+    replaces the old one, unanswered)."""
     lower_priority(nice)
     world: World = conn.recv()
     mapped: tuple[int, memoryview] | None = None  # the shared buffer's size and view, as last mapped
     while True:
         try:
-            request, size = conn.recv()
+            message = conn.recv()
         except EOFError:
             return
+        if isinstance(message, World):
+            world = message
+            continue
+        request, size = message
         try:
             if mapped is None or mapped[0] != size:
                 mapped = (size, memoryview(mmap.mmap(buffer_fd, size)))

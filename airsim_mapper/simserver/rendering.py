@@ -73,9 +73,10 @@ def renderer_name() -> str:
 def render(world: World, request: RenderRequest, into: memoryview | None = None) -> dict[int, RenderedImage]:
     """The requested images of a camera, by this process's renderer; CameraError if the request is invalid.
 
-    With `into` (at least `request.nbytes`), the images are written there at `request.layout()` and
-    their data are views of it.
+    A changing world is drawn as it is now, all of one image from one World. With `into` (at least
+    `request.nbytes`), the images are written there at `request.layout()` and their data are views of it.
     """
+    world = world.current
     request.check()
     if not request.kinds:
         return {}

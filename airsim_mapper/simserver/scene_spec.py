@@ -21,7 +21,8 @@ from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
 from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
-from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
+from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec, actor_script
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.motion import DEFAULT_MASS_KG, MAX_WIND_MPS
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
@@ -44,7 +45,7 @@ DEFAULT_HOME = (47.641468, -122.140165, 122.0)
 EARTH_RADIUS_M = 6378137.0
 
 
-class SceneSpecError(ValueError):
+class SceneSpecError(SimServerError, ValueError):
     """The scene configuration cannot be loaded; the message says what is wrong."""
 
 
@@ -398,7 +399,8 @@ def _env_actor(actor: Any, index: int, home: tuple[float, float, float]) -> EnvA
     config = actor.get("env-actor-config", {})
     links = config.get("links", []) if isinstance(config, Mapping) else []
     names = tuple(str(link["name"]) for link in links if isinstance(link, Mapping) and "name" in link)
-    return EnvActorSpec(str(name), position, orientation, names)
+    script = actor_script(config, f"environment actor '{name}'", SceneSpecError)
+    return EnvActorSpec(str(name), position, orientation, names, script)
 
 
 # ---------------------------------------------------------------------------------------------- topics
