@@ -26,6 +26,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
+import functools
 import logging
 import threading
 import time
@@ -33,7 +34,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from airsim_mapper.engine.fast_frames import decode_map
+from airsim_mapper.engine.fast_frames import Buffer, decode_map, parse_frame_header
 from airsim_mapper.engine.health import PROBE_METHOD
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
@@ -123,7 +124,7 @@ class SimLink:
             self._bad_frame("the client's receive loop had stopped; receiving again")
         return True
 
-    def dispatch(self, packed: bytes) -> None:
+    def dispatch(self, packed: Buffer) -> None:
         """One frame off the topics socket: decode it and hand the message to the topic's callbacks."""
         import msgpack
 
@@ -136,15 +137,20 @@ class SimLink:
             )
             return
         try:
-            frame = msgpack.unpackb(packed, raw=True)
-            if frame[0] != MESSAGE_FRAME:
-                self._bad_frame(f"frame of unknown type {frame[0]!r} dropped (only MESSAGE is expected)")
+            header = parse_frame_header(packed)
+            if header is None:  # any other framing: msgpack's path, as the client reads it
+                frame = msgpack.unpackb(packed, raw=True)
+                frame_type, topic, body = frame[0], frame[1].decode("utf-8"), frame[2]
+            else:  # the body stays where it was received: no copy
+                frame_type, topic = header.frame_type, header.topic
+                body = memoryview(packed)[header.body_start : header.body_end]
+            if frame_type != MESSAGE_FRAME:
+                self._bad_frame(f"frame of unknown type {frame_type!r} dropped (only MESSAGE is expected)")
                 return
-            topic = frame[1].decode("utf-8")
             entry = client.subs.get(topic)
             if entry is None:
                 return
-            message = self._decode(topic, entry, frame[2])
+            message = self._decode(topic, entry, body)
         except Exception as exc:
             self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
             return
@@ -155,7 +161,7 @@ class SimLink:
             except Exception as exc:
                 self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
 
-    def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
+    def _decode(self, topic: str, entry: dict, body: Buffer) -> Any:
         message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))
         self.fast_frames += fast
         return message
@@ -365,7 +371,7 @@ class SimLink:
         return answered
 
 
-def decode_body(body: bytes, fast: bool) -> tuple[Any, bool]:
+def decode_body(body: Buffer, fast: bool) -> tuple[Any, bool]:
     """The message of a frame body, and whether it took the fast path.
 
     With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
@@ -395,9 +401,10 @@ def receive(client: Any) -> None:
     import pynng
 
     sock = client.socket_topics
+    read = functools.partial(receive_frame, sock) if isinstance(sock, pynng.Socket) else sock.recv
     while client.state:
         try:
-            packed = sock.recv()
+            packed = read()
         except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
             continue
         except pynng.exceptions.Closed:
@@ -406,6 +413,23 @@ def receive(client: Any) -> None:
             getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
             continue
         getattr(client, CURRENT_LINK).dispatch(packed)
+
+
+def receive_frame(sock: Any) -> memoryview:
+    """The next frame on a pynng socket, as a view of NNG's own message: not copied.
+
+    `Socket.recv` copies each frame twice (NNG's message into a buffer it allocates, that buffer into a
+    Python bytes object). Here the view keeps the message alive and frees it when the last view of it (the
+    pixels of an image being published, say) is gone. NNG's blocking receive runs without the GIL.
+    """
+    from pynng import ffi, lib
+    from pynng.exceptions import check_err
+
+    holder = ffi.new("nng_msg **")
+    check_err(lib.nng_recvmsg(sock.socket, holder, 0))
+    msg = holder[0]
+    body = ffi.gc(lib.nng_msg_body(msg), lambda _body: lib.nng_msg_free(msg))
+    return memoryview(ffi.buffer(body, lib.nng_msg_len(msg)))
 
 
 def _take_over(client: Any) -> bool:
