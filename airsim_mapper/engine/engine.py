@@ -35,6 +35,7 @@ from airsim_mapper.convert.command import shorten
 from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, Throttled, build
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import RosLink
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
@@ -117,13 +118,13 @@ class Engine:
         self.sim = link(client, self.frame_counts)
         self.ros = ros or RosLink()
         self.hub = StreamHub(self.sim, self.ros.send_tf)
-        self.shared: dict[Any, Any] = {}
+        self.mounts = CameraMounts()
         self.sim_time = SimTimeWatch(warn=Throttled("sim time").warn)
         self.services = Services(
             self.sim,
             self.hub,
             self.ros,
-            self.shared,
+            self.mounts,
             self._node_action,
             counts=self.frame_counts,
             sim_time=self.sim_time,
@@ -177,7 +178,7 @@ class Engine:
             if self._freeze_heap:
                 thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
-            self.shared.clear()
+            self.mounts.clear()
             self._start_bridges(specs, {s.name for s in specs} - set(self.bridges))
             if self._freeze_heap:
                 took_ms = freeze_heap()
@@ -445,7 +446,7 @@ class Engine:
                 link.abandon()
                 return "shutting down" if not self._running else "the scene changed meanwhile"
             old = self.sim
-            self.shared.clear()
+            self.mounts.clear()
             self._swap_link(link, client, world)
             self.counters["reconnects"] += 1
         old.stop_loop()
