@@ -111,7 +111,8 @@ def test_a_camera_pose_command_sends_the_cameras_frames_again_and_stop_removes_t
 
 
 def test_the_pose_stream_feeds_no_camera_or_sensor_frame(services):
-    """Per pose message only the robot's own bridges run (pose, tf, odometry, clock, camera poses)."""
+    """Per pose message only the robot's own bridges run (pose, tf, odometry, clock, camera poses), and
+    without subscribers only the robot's pose and tf."""
     specs = specs_of("default")
     pose_topic = next(s.sim for n, s in specs.items() if n.startswith("actual_pose[Drone1"))
     fed = [
@@ -120,3 +121,7 @@ def test_the_pose_stream_feeds_no_camera_or_sensor_frame(services):
         if spec.sim == pose_topic and isinstance(build(spec, services), SimToRos)
     ]
     assert set(fed) == {"actual_pose", "camera_pose", "clock", "odometry"}
+    eager = {
+        name.split("[")[0] for name, spec in specs.items() if spec.sim == pose_topic and not spec.options.lazy
+    }
+    assert eager == {"actual_pose"}
