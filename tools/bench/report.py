@@ -122,7 +122,7 @@ def e2e_table(e2e: dict[str, Any]) -> str:
         add("  (the load: camera 1080p @60)", load, "bridge", names[1])
     floor = e2e.get("forwarder", {})
     for key, label in FLOOR_ROWS:
-        if key in floor:
+        if key in floor and key != "scale":  # the ten drones' floor is in the table below
             for name in floor[key]["topics"]:
                 add(f"bare forwarder: {label}, {_kind(name)}", floor[key], "forwarder", name)
     text = _table(header, rows)

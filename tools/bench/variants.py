@@ -1,11 +1,13 @@
-"""The bridge's receive-path variants side by side: 1080p camera @30 + pose @100, one run, same frames.
+"""The bridge's variants side by side, interleaved `--rounds` times in one run on the same frames.
 
-Each variant is the node with the comparison options of tools/bench/node.py (`--malloc glibc` leaves
-glibc's adaptive malloc thresholds, `--receive copy` receives with pynng's `recv`), next to the bare
-forwarder. Prints CPU, minor page faults per image frame, RSS, pose rate and p99 for each, interleaved
-`--rounds` times so that a slow moment of the host touches every variant.
+Camera (default): 1080p camera @30 + pose @100 through the node with the comparison options of
+tools/bench/node.py (`--malloc glibc` leaves glibc's adaptive malloc thresholds, `--receive copy` receives
+with pynng's `recv`), next to the bare forwarder. `--drones N`: N drones, each pose @100 + 320x240 @10,
+through the node with the default mapping, with the previous default (camera frames converted per pose,
+camera_pose eager; pose_path.PREVIOUS) and with the previous receive path as well, next to the forwarder.
+Prints CPU, minor page faults per image frame, RSS, the slowest pose rate and the worst pose p99.
 
-    python -m tools.bench.variants [--rounds 2] [--duration 8] [--width 1920 --height 1080]
+    python -m tools.bench.variants [--rounds 2] [--duration 8] [--width 1920 --height 1080] [--drones N]
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any
 
 from tools.bench import scenes
 from tools.bench.e2e import Bench
+from tools.bench.pose_path import PREVIOUS
 from tools.bench.report import _table
 
 VARIANTS: dict[str, tuple[str, ...]] = {
@@ -30,16 +33,16 @@ VARIANTS: dict[str, tuple[str, ...]] = {
 
 def figures(result: dict[str, Any], role: str) -> dict[str, float]:
     topics = result["topics"]
-    image = next(t for name, t in topics.items() if name.endswith("/image"))
-    pose = next(t for name, t in topics.items() if name.endswith("actual_pose"))
-    faults = result[f"{role}_minor_faults_per_s"]
+    images = [t for name, t in topics.items() if name.endswith("/image")]
+    poses = [t for name, t in topics.items() if name.endswith("actual_pose")]
+    image_hz = sum(t["rate_hz"] for t in images)
     return {
         "cpu": result[f"{role}_cpu_cores"],
-        "faults_per_frame": faults / max(image["rate_hz"], 1e-9),
+        "faults_per_frame": result[f"{role}_minor_faults_per_s"] / max(image_hz, 1e-9),
         "rss": result[f"{role}_rss_mb"],
-        "image_hz": image["rate_hz"],
-        "pose_hz": pose["rate_hz"],
-        "pose_p99": pose.get("latency_p99_ms", float("nan")),
+        "image_hz": image_hz / len(images),
+        "pose_hz": min(t["rate_hz"] for t in poses),
+        "pose_p99": max(t.get("latency_p99_ms", float("nan")) for t in poses),
     }
 
 
@@ -49,15 +52,33 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=8.0)
     parser.add_argument("--width", type=int, default=1920)
     parser.add_argument("--height", type=int, default=1080)
+    parser.add_argument("--drones", type=int, default=0, help="the pose case: N drones instead")
     args = parser.parse_args(argv)
     bench = Bench(Path(tempfile.mkdtemp(prefix="airsim_mapper_variants_")), duration_s=args.duration)
     load_start = os.getloadavg()[0]
-    rows: dict[str, list[dict[str, float]]] = {name: [] for name in [*VARIANTS, "bare forwarder"]}
-    topics = [scenes.image_topic(1), scenes.pose_topic(1)]
+    variants = dict(VARIANTS)
+    if args.drones:
+        previous = bench.config_dir / "previous.yaml"
+        previous.parent.mkdir(parents=True, exist_ok=True)
+        previous.write_text(PREVIOUS)
+        variants = {
+            "bridge": (),
+            "bridge, previous default mapping": ("--mapping", str(previous)),
+            "bridge, previous mapping and receive path": (
+                ("--mapping", str(previous), "--malloc", "glibc", "--receive", "copy")
+            ),
+        }
+    rows: dict[str, list[dict[str, float]]] = {name: [] for name in [*variants, "bare forwarder"]}
+    drones = args.drones or 1
+    topics = [t for i in range(1, drones + 1) for t in (scenes.image_topic(i), scenes.pose_topic(i))]
     try:
-        scene = bench.scene("variants", 1, scenes.CameraSetup(args.width, args.height, 1 / 30, (0,)))
+        if args.drones:
+            camera = scenes.CameraSetup(320, 240, 0.1, (0,))
+        else:
+            camera = scenes.CameraSetup(args.width, args.height, 1 / 30, (0,))
+        scene = bench.scene("variants", drones, camera)
         for _ in range(args.rounds):
-            for name, options in VARIANTS.items():
+            for name, options in variants.items():
                 with bench.bridge_session(scene, node_args=options) as session:
                     rows[name].append(figures(session.probe("variant", topics), "bridge"))
             with bench.forwarder_session(scene, camera=True) as session:
@@ -82,12 +103,19 @@ def main(argv: list[str] | None = None) -> int:
                 " ".join(f"{r['cpu']:.3f}" for r in runs),
             ]
         )
-    header = ["variant", "CPU cores", "faults/frame", "RSS MB", "image Hz", "pose Hz", "pose p99", "CPU runs"]
+    header = [
+        "variant",
+        "CPU cores",
+        "faults/frame",
+        "RSS MB",
+        "image Hz",
+        "pose Hz min",
+        "pose p99 max",
+        "CPU runs",
+    ]
     print(_table(header, body))
-    print(
-        f"{args.width}x{args.height} @30; load average {load_start:.1f} at start, "
-        f"{os.getloadavg()[0]:.1f} at end"
-    )
+    case = f"{drones} drones, 320x240 @10" if args.drones else f"{args.width}x{args.height} @30"
+    print(f"{case}; load average {load_start:.1f} at start, {os.getloadavg()[0]:.1f} at end")
     return 0
 
 
