@@ -53,6 +53,10 @@ class CameraMounts:
                 self._listeners.pop(key, None)
 
     def clear(self) -> None:
-        """A new scene: every camera is back on its config origin."""
+        """A new scene, or a simulator that restarted: every camera is back on its config origin, and the
+        listeners of the cameras that had moved are told."""
         with self._lock:
-            self._mounts.clear()
+            moved, self._mounts = list(self._mounts), {}
+            listeners = [f for key in moved for f in self._listeners.get(key, ())]
+        for listener in listeners:
+            listener()

@@ -104,10 +104,13 @@ def test_a_camera_pose_command_sends_the_cameras_frames_again_and_stop_removes_t
     assert [moved.translation.x, moved.translation.y, moved.translation.z] == [0.5, 0.25, 0.1]
     assert abs(moved.rotation.z) == pytest.approx(1.0) and bridge.stats.messages == 2
     assert ros.static_transforms[other.tf.child] is before and unmoved.stats.messages == 1
+    services.mounts.clear()  # the simulator restarted: the camera is back on its config origin
+    assert ros.static_transforms[frame.tf.child].transform.translation.x != 0.5
+    assert bridge.stats.messages == 3 and unmoved.stats.messages == 1
     bridge.stop()
     assert frame.tf.child not in ros.static_transforms
     services.mounts.set(camera_pose_key("Drone1", "DownCamera"), (np.zeros(3), np.array([1.0, 0, 0, 0])))
-    assert frame.tf.child not in ros.static_transforms and bridge.stats.messages == 2
+    assert frame.tf.child not in ros.static_transforms and bridge.stats.messages == 3
 
 
 def test_the_pose_stream_feeds_no_camera_or_sensor_frame(services):
