@@ -6,15 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fakes import FakeRos, FakeSim
+from fakes import FakeRos, FakeSimLink
 from geometry_msgs.msg import PoseStamped
 from harness import SIM_CONFIG
 
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.pose import camera_pose_key
-from airsim_mapper.engine.bridges import MountTransform, Services, SimToRos, build
+from airsim_mapper.engine.bridges import MountTransform, Services, SimToRos
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
+from airsim_mapper.engine.runners import build
 from airsim_mapper.geometry import q_mul, q_rotate
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
@@ -35,7 +36,7 @@ def ros() -> FakeRos:
 
 @pytest.fixture
 def services(ros: FakeRos) -> Services:
-    sim = FakeSim()
+    sim = FakeSimLink()
     return Services(sim, StreamHub(sim, ros.send_tf), ros, CameraMounts(), lambda *_: None)
 
 

@@ -8,7 +8,7 @@ import msgpack
 import pynng
 
 from airsim_mapper.engine.fast_frames import parse_frame_header
-from airsim_mapper.engine.sim_link import decode_body, receive_frame
+from airsim_mapper.engine.receive import decode_body, receive_frame
 from airsim_mapper.simserver.protocol import encode_frame
 
 

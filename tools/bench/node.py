@@ -23,7 +23,7 @@ from typing import Any
 
 from airsim_mapper import wrapper
 from airsim_mapper.cli import node
-from airsim_mapper.engine import sim_link
+from airsim_mapper.engine import receive
 
 
 def profile_all_threads() -> list[cProfile.Profile]:
@@ -92,9 +92,9 @@ def main(argv: list[str] | None = None) -> int:
     decode = _option(args, "--decode", "bridge")
     profile_path = _option(args, "--profile", None)
     if decode == "client":
-        sim_link.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
+        receive.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
     if _option(args, "--receive", "view") == "copy":  # comparison: pynng's own recv, which copies twice
-        sim_link.receive_frame = lambda sock: sock.recv()
+        receive.receive_frame = lambda sock: sock.recv()
     if _option(args, "--malloc", "fixed") == "glibc":  # comparison: glibc's adaptive malloc thresholds
         wrapper.keep_frame_buffers = lambda: False
     profiles = profile_all_threads() if profile_path else []

@@ -56,8 +56,9 @@ class SerialisingPublisher:
 def run(mapping: str, messages: int) -> dict[str, float]:
     from tf2_msgs.msg import TFMessage
 
-    from airsim_mapper.engine.bridges import Services, SimToRos, build
+    from airsim_mapper.engine.bridges import Services, SimToRos
     from airsim_mapper.engine.mounts import CameraMounts
+    from airsim_mapper.engine.runners import build
     from airsim_mapper.mapping.expand import expand
     from airsim_mapper.mapping.loader import load_mapping
     from airsim_mapper.scene import read_scene
