@@ -67,6 +67,34 @@ def blas_threads() -> list[int]:
     return [count for count in counts if count is not None]
 
 
+# mallopt(3) parameters and the values the bridge sets: buffers up to the largest frame the link takes by
+# default (--max-frame-mb 64) stay on the heap, and the heap keeps up to 128 MB of free top.
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+MMAP_THRESHOLD_BYTES = 64 * 1024 * 1024
+TRIM_THRESHOLD_BYTES = 128 * 1024 * 1024
+
+
+def keep_frame_buffers() -> bool:
+    """Keep large frame buffers in the heap instead of returning them to the kernel after each frame.
+
+    With its default, adaptive thresholds glibc gives a freed multi-megabyte buffer back (munmap, or
+    `madvise(MADV_DONTNEED)` when it trims a thread's heap) and the next frame faults every page of it
+    back in: a few thousand page faults per 1080p frame, a third of the bridge's CPU at 30 Hz
+    (docs/performance.md). Fixed thresholds keep buffers up to 64 MB on the heap and the heap's free top
+    up to 128 MB; both apply to every thread of the process from now on. False where there is no glibc
+    `mallopt` (another C library), or when AIRSIM_MAPPER_NO_TUNING is set.
+    """
+    if os.environ.get("AIRSIM_MAPPER_NO_TUNING"):
+        return False
+    mallopt = getattr(ctypes.CDLL(None), "mallopt", None)
+    if mallopt is None:
+        return False
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    return bool(
+        mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES) and mallopt(M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES)
+    )
+
+
 def tune_threads(switch_interval_s: float = SWITCH_INTERVAL_S) -> bool:
     """One BLAS thread and a switch interval of at most `switch_interval_s`; False if tuning is off."""
     if os.environ.get("AIRSIM_MAPPER_NO_TUNING"):

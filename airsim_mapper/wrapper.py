@@ -35,6 +35,7 @@ from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
+from airsim_mapper.tuning import keep_frame_buffers
 
 log = logging.getLogger("rosout.airsim_mapper")
 
@@ -66,7 +67,9 @@ def redirect_client_log() -> None:
 class ProjectAirSimWrapper:
     """Runs the bridge for a mapping on a Project AirSim client, in the calling ROS node.
 
-    The wrapper changes nothing process-wide unless asked: with `tune_process=True` (what the node does)
+    The wrapper fixes glibc's malloc thresholds, so that image frames are not returned to the kernel and
+    faulted back in on every frame (`tuning.keep_frame_buffers`; AIRSIM_MAPPER_NO_TUNING=1 leaves them).
+    Beyond that it changes nothing process-wide unless asked: with `tune_process=True` (what the node does)
     it limits numpy's OpenBLAS to one thread, lowers the interpreter's switch interval to 0.5 ms, makes
     every rospy publisher of the process send on the publishing thread when the socket takes the message
     at once, and freezes the heap after each scene change (`gc.freeze`); engine/realtime.py explains why.
@@ -90,6 +93,7 @@ class ProjectAirSimWrapper:
         tune_process: bool = False,
         max_frame_mb: float = MAX_FRAME_MB,
     ) -> None:
+        keep_frame_buffers()  # process-wide, from the first frame the bridge receives (tuning.py)
         redirect_client_log()
         self.shutdown_timeout = shutdown_timeout
         self.mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)

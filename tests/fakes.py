@@ -162,6 +162,7 @@ class FakeRos:
     subscribers: dict[str, FakeEndpoint] = field(default_factory=dict)
     services: dict[str, FakeEndpoint] = field(default_factory=dict)
     transforms: list = field(default_factory=list)
+    static_transforms: dict = field(default_factory=dict)  # /tf_static, by child frame
     closed: bool = False
     refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
     made: list[FakePublisher] = field(default_factory=list)  # every publisher ever made, in order
@@ -188,6 +189,12 @@ class FakeRos:
 
     def send_tf(self, transforms: list) -> None:
         self.transforms.extend(transforms)
+
+    def set_static_tf(self, transform: Any) -> None:
+        self.static_transforms[transform.child_frame_id] = transform
+
+    def remove_static_tf(self, child: str) -> None:
+        self.static_transforms.pop(child, None)
 
     def transform_pose(self, pose_stamped: Any, target: str) -> Any:
         """tf knows no frames here."""

@@ -47,7 +47,8 @@ def ros_cell(bridge: BridgeSpec) -> str:
     if bridge.ros is None:
         if bridge.tf is None:
             return "-"
-        return f"tf `{bridge.tf.parent}` → `{bridge.tf.child}`"
+        kind = "tf_static" if bridge.tf.static else "tf"  # a mount, sent once relative to its robot
+        return f"{kind} `{bridge.tf.parent}` → `{bridge.tf.child}`"
     kind = " (service)" if bridge.ros_kind == "service" else ""
     return f"`{bridge.ros}`{kind}"
 

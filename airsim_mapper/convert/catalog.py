@@ -143,7 +143,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             PUBLISH,
             "odometry",
             "odometry",
-            "robot actual_pose -> Odometry; body-frame twist from successive poses (state in ctx.shared)",
+            "robot actual_pose -> Odometry; body-frame twist from successive poses (state in ctx.state)",
             example=_e({**STAMP, **POSE}),
         ),
         _c(

@@ -1,4 +1,11 @@
-"""The per-bridge context every converter receives alongside the message."""
+"""The per-bridge context every converter receives alongside the message.
+
+Converters are functions of (message, context). Two parts of a context change between messages, each
+with one owner: `mounts` (the engine's camera mounts, written only by a camera pose command's reply and
+read here) and `state` (the bridge's own memory across its messages, written only by its converter on
+the bridge's one worker thread, such as odometry's previous pose). No converter writes state that another
+bridge reads.
+"""
 
 from __future__ import annotations
 
@@ -29,8 +36,9 @@ class ConvertContext:
     - source: the scene element (capture setting + "camera_origin", sensor config, robot actor).
     - variables: the template variables of the bridge (robot_name, camera_name, ...).
     - options: the rule's airsim_mapper.mapping.model.Options (command limits, watchdog).
-    - shared: engine-wide mutable state, e.g. camera pose overrides keyed
-      ``("camera_pose", robot_name, camera_name)``.
+    - mounts: read-only, the camera mounts commanded since the scene loaded, keyed
+      ``convert.pose.camera_pose_key(robot_name, camera_name)`` (engine/mounts.py owns them).
+    - state: this bridge's own memory across messages (each bridge gets a fresh dict).
     """
 
     frame_id: str = ""
@@ -41,7 +49,8 @@ class ConvertContext:
     source: Mapping[str, Any] = field(default_factory=dict)
     variables: Mapping[str, str] = field(default_factory=dict)
     options: Any = None
-    shared: MutableMapping[Any, Any] = field(default_factory=dict)
+    mounts: Mapping[Any, Any] = field(default_factory=dict)
+    state: MutableMapping[Any, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:

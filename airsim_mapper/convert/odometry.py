@@ -1,7 +1,7 @@
 """Robot actual_pose -> nav_msgs/Odometry, the twist estimated from successive poses.
 
 The simulator publishes no velocity stream, so the twist is a finite difference of the last two poses the
-bridge converted (their sim stamps give dt), kept per bridge in ``ctx.shared``. Linear and angular
+bridge converted (their sim stamps give dt), kept in the bridge's own ``ctx.state``. Linear and angular
 velocity are expressed in the child (body) frame, as nav_msgs/Odometry specifies: FRD with the NED
 convention, FLU with ENU. The first pose, and a pose whose stamp does not advance (paused clock), repeat
 the last twist (zero at first). Covariances are unknown (zeros).
@@ -80,14 +80,13 @@ def odometry(msg: Mapping[str, Any], ctx: ConvertContext) -> Odometry:
         position, q = frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q)
     position, q = tuple(map(float, position)), q_normalized(q)
     child = child_frame(ctx)
-    key = (ODOMETRY_KEY, ctx.variables.get("robot_name"), child, ctx.convention)
-    previous: PoseSample | None = ctx.shared.get(key)
+    previous: PoseSample | None = ctx.state.get(ODOMETRY_KEY)
     linear, angular = ZERO, ZERO
     if previous is not None:
         linear, angular = previous.linear, previous.angular
         if t_ns > previous.t_ns:
             linear, angular = body_twist(previous, position, q, (t_ns - previous.t_ns) / 1e9)
-    ctx.shared[key] = PoseSample(t_ns, position, q, linear, angular)
+    ctx.state[ODOMETRY_KEY] = PoseSample(t_ns, position, q, linear, angular)
     out = Odometry(header=header(msg, ctx), child_frame_id=child)
     out.pose.pose = ros_pose(position, q)
     out.twist.twist = Twist(Vector3(*linear), Vector3(*angular))

@@ -40,14 +40,14 @@ def pose_stamped(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
 
 
 def camera_pose_key(robot_name: str | None, camera_name: str | None) -> tuple[str, Any, Any]:
-    """The ctx.shared key under which the engine stores a camera's commanded pose."""
+    """The ctx.mounts key under which the engine keeps a camera's commanded pose."""
     return (CAMERA_POSE_KEY, robot_name, camera_name)
 
 
 def camera_pose_override(set_pose_params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     """(position, q_wxyz) relative to the robot (FRD) from camera_desired_pose's SetPose params.
 
-    The engine stores this in ctx.shared[camera_pose_key(robot, camera)] after a successful SetPose.
+    The engine keeps this in ctx.mounts[camera_pose_key(robot, camera)] after a successful SetPose.
     """
     pose = set_pose_params["pose"]
     t, r = pose["translation"], pose["rotation"]
@@ -59,7 +59,7 @@ def camera_pose_override(set_pose_params: Mapping[str, Any]) -> tuple[np.ndarray
 def camera_mount(ctx: ConvertContext) -> tuple[np.ndarray, np.ndarray]:
     """The camera's pose relative to its robot (NED/FRD): a commanded override, else the config origin."""
     key = camera_pose_key(ctx.variables.get("robot_name"), ctx.variables.get("camera_name"))
-    override = ctx.shared.get(key)
+    override = ctx.mounts.get(key)
     if override is not None:
         position, q = override
         return np.asarray(position, dtype=float), np.asarray(q, dtype=float)

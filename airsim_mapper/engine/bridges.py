@@ -13,18 +13,23 @@ import dataclasses
 import logging
 import threading
 import time
-from collections.abc import Callable, MutableMapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
+
+from geometry_msgs.msg import TransformStamped
 
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
+from airsim_mapper.convert.pose import camera_pose_key
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.replays import LatchedReplays
 from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
+from airsim_mapper.geometry import q_conjugate, q_mul, q_rotate
 from airsim_mapper.logs import RateLimitedLog
 from airsim_mapper.mapping.model import BridgeSpec
 
@@ -49,7 +54,7 @@ class Services:
     sim: SimLink
     hub: StreamHub
     ros: RosLink
-    shared: MutableMapping[Any, Any]
+    mounts: CameraMounts  # camera mounts moved by pose commands (engine/mounts.py)
     node_action: Callable[[str, dict], Any]  # an engine action by its catalogue name (load_scene)
     streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
     counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
@@ -68,7 +73,7 @@ def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
         source=spec.source,
         variables=spec.variables,
         options=spec.options,
-        shared=services.shared,
+        mounts=services.mounts,
     )
 
 
@@ -266,13 +271,75 @@ class StreamingImage(SimToRos):
             self._set_attached(True)
 
 
+# The robot at the world origin, level: what a mount's converter composes to give the mount itself.
+ROBOT_AT_ORIGIN = {
+    "time_stamp": 0,
+    "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+    "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+}
+
+
+class MountTransform(Bridge):
+    """A frame mounted on a robot (a camera's, a sensor's), on /tf_static relative to the robot's frame.
+
+    For a rule with `tf: {static: true}`: the transform is sent once at start and again whenever a camera
+    pose command moves the camera, never per pose message. It is what the rule's converter gives for the
+    robot at the world origin, taken relative to the robot's own pose there (the `pose` converter's, in the
+    same convention), so map -> robot (the robot's pose) -> mount is the frame the converter gives per pose.
+    """
+
+    def __init__(self, spec: BridgeSpec, services: Services) -> None:
+        super().__init__(spec, services)
+        self.convert = registry.get(spec.converter)
+        variables = spec.variables
+        self.key = camera_pose_key(variables.get("robot_name"), variables.get("camera_name"))
+
+    def start(self) -> None:
+        self.services.mounts.listen(self.key, self.send)
+        self.send()
+
+    def send(self) -> None:
+        try:
+            transform = self._transform()
+        except ConversionError as exc:
+            self.fail(f"no static transform for {self.spec.tf.child}: {exc}")
+            return
+        self.services.ros.set_static_tf(transform)
+        self.stats.messages += 1
+        self.stats.last_time = time.monotonic()
+
+    def _transform(self) -> Any:
+        robot = registry.get("pose")(ROBOT_AT_ORIGIN, self.ctx).pose
+        mount = self.convert(ROBOT_AT_ORIGIN, self.ctx).pose
+        robot_q = _wxyz(robot.orientation)
+        inverse = q_conjugate(robot_q)
+        offset = [getattr(mount.position, a) - getattr(robot.position, a) for a in "xyz"]
+        position = q_rotate(inverse, offset)
+        q = q_mul(inverse, _wxyz(mount.orientation))
+        t = TransformStamped()
+        t.header.stamp = self.services.ros.now()
+        t.header.frame_id, t.child_frame_id = self.spec.tf.parent, self.spec.tf.child
+        translation, rotation = t.transform.translation, t.transform.rotation
+        translation.x, translation.y, translation.z = position
+        rotation.w, rotation.x, rotation.y, rotation.z = q
+        return t
+
+    def stop(self) -> None:
+        self.services.mounts.unlisten(self.key, self.send)
+        self.services.ros.remove_static_tf(self.spec.tf.child)
+
+
+def _wxyz(q: Any) -> tuple[float, float, float, float]:
+    return (q.w, q.x, q.y, q.z)
+
+
 def remember_camera_pose(bridge: Bridge, params: dict, _result: Any) -> None:
     """A camera pose command took effect: the camera's pose and image frames follow it."""
-    from airsim_mapper.convert.pose import camera_pose_key, camera_pose_override
+    from airsim_mapper.convert.pose import camera_pose_override
 
     variables = bridge.spec.variables
     key = camera_pose_key(variables.get("robot_name"), variables.get("camera_name"))
-    bridge.services.shared[key] = camera_pose_override(params)
+    bridge.services.mounts.set(key, camera_pose_override(params))
 
 
 def next_streaming_camera(bridge: Bridge, _params: dict, _result: Any) -> None:

@@ -25,6 +25,7 @@ from typing import Any
 from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import RosLink
 from airsim_mapper.engine.runners import build
@@ -80,13 +81,13 @@ class Engine:
         self.sim = self.make_link(client)
         self.ros = ros or RosLink()
         self.hub = StreamHub(self.sim, self.ros.send_tf)
-        self.shared: dict[Any, Any] = {}
+        self.mounts = CameraMounts()
         self.sim_time = SimTimeWatch(warn=RateLimitedLog(bridge_log, WARN_PERIOD_S, prefix="sim time").warn)
         self.services = Services(
             self.sim,
             self.hub,
             self.ros,
-            self.shared,
+            self.mounts,
             self._node_action,
             counts=self.frame_counts,
             sim_time=self.sim_time,
@@ -152,7 +153,7 @@ class Engine:
             if self._freeze_heap:
                 thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
             self.scene = scene
-            self.shared.clear()
+            self.mounts.clear()
             self._start_bridges(specs, {s.name for s in specs} - set(self.bridges))
             if self._freeze_heap:
                 took_ms = freeze_heap()

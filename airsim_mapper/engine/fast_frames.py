@@ -12,13 +12,13 @@ float32) instead of lists; the converters accept both.
 
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Union
 
 import msgpack
 import numpy as np
 
+Buffer = Union[bytes, memoryview]  # a frame as received: bytes, or a view of the transport's message
 MESSAGE_FRAME = 2
 MIN_ARRAY_ELEMENTS = 64  # shorter arrays go through msgpack
 MIN_SLICE_BYTES = 1024  # shorter bin/str values go through msgpack
@@ -49,7 +49,7 @@ class FrameHeader:
     body_end: int
 
 
-def _str_or_bin_span(buf: bytes, pos: int) -> tuple[int, int] | None:
+def _str_or_bin_span(buf: Buffer, pos: int) -> tuple[int, int] | None:
     """(start, end) of the payload of the str/bin value at `pos`, or None if it is not one."""
     if pos >= len(buf):
         return None
@@ -69,7 +69,7 @@ def _str_or_bin_span(buf: bytes, pos: int) -> tuple[int, int] | None:
     return start, start + size
 
 
-def parse_frame_header(frame: bytes) -> FrameHeader | None:
+def parse_frame_header(frame: Buffer) -> FrameHeader | None:
     """The header of a `[type, topic, body]` frame (fixint type, str/bin topic and body), else None."""
     if len(frame) < 4 or frame[0] != 0x93 or frame[1] > 0x7F:
         return None
@@ -80,13 +80,13 @@ def parse_frame_header(frame: bytes) -> FrameHeader | None:
     if body_span is None or body_span[1] != len(frame):
         return None
     try:
-        topic = frame[topic_span[0] : topic_span[1]].decode("utf-8")
+        topic = str(frame[topic_span[0] : topic_span[1]], "utf-8")
     except UnicodeDecodeError:
         return None
     return FrameHeader(frame[1], topic, *body_span)
 
 
-def _map_header(buf: bytes, pos: int) -> tuple[int, int] | None:
+def _map_header(buf: Buffer, pos: int) -> tuple[int, int] | None:
     tag = buf[pos]
     if 0x80 <= tag <= 0x8F:
         return tag & 0x0F, pos + 1
@@ -97,7 +97,7 @@ def _map_header(buf: bytes, pos: int) -> tuple[int, int] | None:
     return None
 
 
-def _typed_array(buf: bytes, pos: int, end: int) -> tuple[np.ndarray, int] | None:
+def _typed_array(buf: Buffer, pos: int, end: int) -> tuple[np.ndarray, int] | None:
     """A large array whose elements all share one fixed-width type byte, as numpy; else None."""
     tag = buf[pos]
     if tag == 0xDC:
@@ -124,14 +124,17 @@ def _typed_array(buf: bytes, pos: int, end: int) -> tuple[np.ndarray, int] | Non
     if first + count * cell.itemsize > end:
         return None
     stop = first + count * cell.itemsize
-    # every element's type byte, gathered by a strided bytes slice (C speed) and compared in one memcmp
-    if buf[first : stop : cell.itemsize] != bytes((marker,)) * count:
-        return None
     cells = np.frombuffer(buf, dtype=cell, count=count, offset=first)
+    if type(buf) is bytes:
+        # every element's type byte, gathered by a strided bytes slice (C speed) and compared in one memcmp
+        if buf[first : stop : cell.itemsize] != bytes((marker,)) * count:
+            return None
+    elif (cells["marker"] != marker).any():  # a memoryview: compared in numpy, without a copy
+        return None
     return cells["value"].astype(native), stop
 
 
-def _large_slice(buf: bytes, pos: int, end: int, views: bool) -> tuple[Any, int] | None:
+def _large_slice(buf: Buffer, pos: int, end: int, views: bool) -> tuple[Any, int] | None:
     """A large bin (-> bytes, or a memoryview of `buf` with `views`) or str (-> str) value; else None."""
     span = _str_or_bin_span(buf, pos)
     if span is None or span[1] > end or span[1] - span[0] < MIN_SLICE_BYTES:
@@ -139,28 +142,38 @@ def _large_slice(buf: bytes, pos: int, end: int, views: bool) -> tuple[Any, int]
     if buf[pos] in (0xC4, 0xC5, 0xC6):
         data = memoryview(buf)[span[0] : span[1]] if views else buf[span[0] : span[1]]
         return data, span[1]
-    data = buf[span[0] : span[1]]
     try:
-        return data.decode("utf-8"), span[1]
+        return str(buf[span[0] : span[1]], "utf-8"), span[1]
     except UnicodeDecodeError:
         return None
 
 
-def _unpack_at(stream: io.BytesIO, pos: int) -> tuple[Any, int]:
-    """One ordinary msgpack value at `pos`, decoded as the client does (str keys, bin as bytes)."""
-    stream.seek(pos)
-    unpacker = msgpack.Unpacker(stream, raw=False, read_size=READ_SIZE)
-    value = unpacker.unpack()
-    return value, pos + unpacker.tell()
+def _unpack_at(buf: Buffer, pos: int) -> tuple[Any, int]:
+    """One ordinary msgpack value at `pos`, decoded as the client does (str keys, bin as bytes).
+
+    The value is fed READ_SIZE bytes at a time, so only its own bytes (and less than READ_SIZE more) are
+    copied, whether `buf` is bytes or a memoryview.
+    """
+    unpacker = msgpack.Unpacker(raw=False)
+    fed = pos
+    while True:
+        unpacker.feed(buf[fed : fed + READ_SIZE])
+        fed += READ_SIZE
+        try:
+            return unpacker.unpack(), pos + unpacker.tell()
+        except msgpack.OutOfData:
+            if fed >= len(buf):
+                raise ValueError("truncated value") from None
 
 
 def decode_map(
-    buf: bytes, start: int = 0, end: int | None = None, views: bool = False
+    buf: Buffer, start: int = 0, end: int | None = None, views: bool = False
 ) -> dict[str, Any] | None:
     """The msgpack map in `buf[start:end]` with its large arrays as numpy; None if it is not a map.
 
-    With `views`, large bin values are read-only memoryviews into `buf` instead of copies.
-    Raises whatever msgpack raises for a malformed value (the caller falls back to the client's path).
+    `buf` is bytes or a byte memoryview (a received frame, not copied). With `views`, large bin values
+    are memoryviews into `buf` instead of copies. Raises whatever msgpack raises for a malformed value
+    (the caller falls back to the client's path).
     """
     end = len(buf) if end is None else end
     if start >= end:
@@ -169,16 +182,15 @@ def decode_map(
     if header is None:
         return None
     count, pos = header
-    stream = io.BytesIO(buf)  # shares the bytes object: no copy
     out: dict[str, Any] = {}
     for _ in range(count):  # one pass per key (a dozen or so), never per element
         tag = buf[pos]
         if 0xA0 <= tag <= 0xBF:  # fixstr key: the common case, decoded without msgpack
-            key, pos = buf[pos + 1 : pos + 1 + (tag & 0x1F)].decode("utf-8"), pos + 1 + (tag & 0x1F)
+            key, pos = str(buf[pos + 1 : pos + 1 + (tag & 0x1F)], "utf-8"), pos + 1 + (tag & 0x1F)
         else:
-            key, pos = _unpack_at(stream, pos)
+            key, pos = _unpack_at(buf, pos)
         fast = _typed_array(buf, pos, end) or _large_slice(buf, pos, end, views)
-        value, pos = fast if fast is not None else _unpack_at(stream, pos)
+        value, pos = fast if fast is not None else _unpack_at(buf, pos)
         out[key] = value
         if pos > end:
             return None

@@ -6,14 +6,15 @@ this module never imports: the link starts the loop and registers itself on the 
 from __future__ import annotations
 
 import contextlib
+import functools
 import logging
 import threading
 import time
 from typing import Any
 
-from airsim_mapper.engine.fast_frames import decode_map
+from airsim_mapper.engine.fast_frames import Buffer, decode_map
 
-__all__ = ["close_client", "decode_body", "receive", "take_over", "unknown_topic"]
+__all__ = ["close_client", "decode_body", "receive", "receive_frame", "take_over", "unknown_topic"]
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
@@ -23,7 +24,7 @@ TAKE_OVER_WAIT_S = 1.0
 CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
 
 
-def decode_body(body: bytes, fast: bool) -> tuple[Any, bool]:
+def decode_body(body: Buffer, fast: bool) -> tuple[Any, bool]:
     """The message of a frame body, and whether it took the fast path.
 
     With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
@@ -53,9 +54,10 @@ def receive(client: Any) -> None:
     import pynng
 
     sock = client.socket_topics
+    read = functools.partial(receive_frame, sock) if isinstance(sock, pynng.Socket) else sock.recv
     while client.state:
         try:
-            packed = sock.recv()
+            packed = read()
         except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
             continue
         except pynng.exceptions.Closed:
@@ -64,6 +66,23 @@ def receive(client: Any) -> None:
             getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
             continue
         getattr(client, CURRENT_LINK).dispatch(packed)
+
+
+def receive_frame(sock: Any) -> memoryview:
+    """The next frame on a pynng socket, as a view of NNG's own message: not copied.
+
+    `Socket.recv` copies each frame twice (NNG's message into a buffer it allocates, that buffer into a
+    Python bytes object). Here the view keeps the message alive and frees it when the last view of it (the
+    pixels of an image being published, say) is gone. NNG's blocking receive runs without the GIL.
+    """
+    from pynng import ffi, lib
+    from pynng.exceptions import check_err
+
+    holder = ffi.new("nng_msg **")
+    check_err(lib.nng_recvmsg(sock.socket, holder, 0))
+    msg = holder[0]
+    body = ffi.gc(lib.nng_msg_body(msg), lambda _body: lib.nng_msg_free(msg))
+    return memoryview(ffi.buffer(body, lib.nng_msg_len(msg)))
 
 
 def take_over(client: Any) -> bool:

@@ -62,6 +62,33 @@ class TfBroadcaster:
             self._broadcaster.sendTransform(transforms)
 
 
+class StaticTf:
+    """The node's static transforms, all in one latched /tf_static message (a latched topic replays only
+    its last message to a new subscriber, so each change sends every transform again)."""
+
+    def __init__(self) -> None:
+        self._publisher: rospy.Publisher | None = None
+        self._transforms: dict[str, TransformStamped] = {}
+        self._lock = threading.Lock()
+
+    def set(self, transform: TransformStamped) -> None:
+        with self._lock:
+            self._transforms[transform.child_frame_id] = transform
+            self._send()
+
+    def remove(self, child: str) -> None:
+        with self._lock:
+            if self._transforms.pop(child, None) is not None:
+                self._send()
+
+    def _send(self) -> None:
+        from tf2_msgs.msg import TFMessage
+
+        if self._publisher is None:
+            self._publisher = rospy.Publisher("/tf_static", TFMessage, queue_size=100, latch=True)
+        self._publisher.publish(TFMessage(list(self._transforms.values())))
+
+
 class RosLink:
     """Every ROS endpoint the runners make, and tf: the engine's one door to rospy for bridges.
 
@@ -71,6 +98,7 @@ class RosLink:
 
     def __init__(self) -> None:
         self.tf = TfBroadcaster()
+        self.static_tf = StaticTf()
         self.frames = TfLookup()
 
     def publisher(
@@ -105,6 +133,13 @@ class RosLink:
 
     def send_tf(self, transforms: list[TransformStamped]) -> None:
         self.tf.send(transforms)
+
+    def set_static_tf(self, transform: TransformStamped) -> None:
+        """Add or replace (by child frame) a transform on /tf_static."""
+        self.static_tf.set(transform)
+
+    def remove_static_tf(self, child: str) -> None:
+        self.static_tf.remove(child)
 
     def transform_pose(self, pose_stamped: Any, target: str) -> Any:
         """A PoseStamped in the `target` frame, through tf (FrameUnknown when tf cannot)."""

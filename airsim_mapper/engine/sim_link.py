@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.engine.fast_frames import Buffer, parse_frame_header
 from airsim_mapper.engine.health import PROBE_METHOD
 from airsim_mapper.engine.receive import (
     CURRENT_LINK,
@@ -166,7 +167,7 @@ class SimLink:
             self._bad_frame("the client's receive loop had stopped; receiving again")
         return True
 
-    def dispatch(self, packed: bytes) -> None:
+    def dispatch(self, packed: Buffer) -> None:
         """One frame off the topics socket: decode it and hand the message to the topic's callbacks."""
         import msgpack
 
@@ -179,15 +180,20 @@ class SimLink:
             )
             return
         try:
-            frame = msgpack.unpackb(packed, raw=True)
-            if frame[0] != MESSAGE_FRAME:
-                self._bad_frame(f"frame of unknown type {frame[0]!r} dropped (only MESSAGE is expected)")
+            header = parse_frame_header(packed)
+            if header is None:  # any other framing: msgpack's path, as the client reads it
+                frame = msgpack.unpackb(packed, raw=True)
+                frame_type, topic, body = frame[0], frame[1].decode("utf-8"), frame[2]
+            else:  # the body stays where it was received: no copy
+                frame_type, topic = header.frame_type, header.topic
+                body = memoryview(packed)[header.body_start : header.body_end]
+            if frame_type != MESSAGE_FRAME:
+                self._bad_frame(f"frame of unknown type {frame_type!r} dropped (only MESSAGE is expected)")
                 return
-            topic = frame[1].decode("utf-8")
             entry = client.subs.get(topic)
             if entry is None:
                 return
-            message = self._decode(topic, entry, frame[2])
+            message = self._decode(topic, entry, body)
         except Exception as exc:
             self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
             return
@@ -199,7 +205,7 @@ class SimLink:
                 self.counts.callback_errors += 1
                 self._warn(f"{topic}: a callback failed: {type(exc).__name__}: {exc}", exc)
 
-    def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
+    def _decode(self, topic: str, entry: dict, body: Buffer) -> Any:
         message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))
         self.fast_frames += fast
         return message

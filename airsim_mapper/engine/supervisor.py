@@ -190,7 +190,7 @@ class Supervisor:
                 link.abandon()
                 return "shutting down" if not self.running else "the scene changed meanwhile"
             old = engine.sim
-            engine.shared.clear()
+            engine.mounts.clear()
             engine.swap_link(link, client, world)
             self.state, self.reason = CONNECTED, ""
             self.counters["reconnects"] += 1

@@ -142,7 +142,7 @@ def _bridge(rule: Rule, key: str, variables: dict[str, str], source: dict[str, A
         ros=fill(rule.ros),
         ros_type=rule.ros_type,
         frame_id=fill(rule.frame_id),
-        tf=TfSpec(fill(rule.tf.parent), fill(rule.tf.child)) if rule.tf else None,
+        tf=TfSpec(fill(rule.tf.parent), fill(rule.tf.child), rule.tf.static) if rule.tf else None,
         convention=rule.convention,
         options=rule.options,
         params=MappingProxyType(template.render_all(rule.params, variables)),

@@ -113,7 +113,7 @@ def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, fi
         ros_type=raw.get("type"),
         converter=raw["converter"],
         frame_id=raw.get("frame_id"),
-        tf=TfSpec(tf["parent"], tf["child"]) if tf else None,
+        tf=TfSpec(tf["parent"], tf["child"], bool(tf.get("static", False))) if tf else None,
         convention=raw.get("convention", convention),
         options=_options(raw, defaults),
         params=MappingProxyType(dict(raw.get("params") or {})),

@@ -84,6 +84,7 @@ class Options:
 class TfSpec:
     parent: str  # template
     child: str  # template
+    static: bool = False  # a mount on the robot: sent on /tf_static relative to the robot's frame
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ def bridge_row(bridge: BridgeSpec) -> dict[str, Any]:
         "ros_type": bridge.ros_type,
         "converter": bridge.converter,
         "frame_id": bridge.frame_id,
-        "tf": {"parent": bridge.tf.parent, "child": bridge.tf.child} if bridge.tf else None,
+        "tf": _tf(bridge.tf),
         "convention": bridge.convention,
         "lazy": bridge.options.lazy,
         "latch": bridge.options.latch,
@@ -44,7 +44,7 @@ def rule_row(rule: Rule) -> dict[str, Any]:
         "ros_type": rule.ros_type,
         "converter": rule.converter,
         "frame_id": rule.frame_id,
-        "tf": {"parent": rule.tf.parent, "child": rule.tf.child} if rule.tf else None,
+        "tf": _tf(rule.tf),
         "convention": rule.convention,
         "enabled": rule.options.enabled,
     }
@@ -69,3 +69,10 @@ def format_rows(rows: Sequence[dict[str, Any]]) -> str:
 def format_table(bridges: Sequence[BridgeSpec]) -> str:
     """The bridges as an aligned text table."""
     return format_rows([bridge_row(b) for b in bridges])
+
+
+def _tf(tf: Any) -> dict[str, Any] | None:
+    """A tf spec as JSON: parent and child, and `static` for a mount sent on /tf_static."""
+    if tf is None:
+        return None
+    return {"parent": tf.parent, "child": tf.child, **({"static": True} if tf.static else {})}

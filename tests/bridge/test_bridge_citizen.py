@@ -319,6 +319,7 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
     from std_msgs.msg import String
 
     from airsim_mapper.engine.bridges import Services
+    from airsim_mapper.engine.mounts import CameraMounts
     from airsim_mapper.engine.ros_link import RosLink
     from airsim_mapper.engine.ros_to_sim import RosToSim
     from airsim_mapper.mapping.expand import expand
@@ -326,7 +327,9 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
 
     (spec,) = expand(load_mapping("default"), None, "replay_probe")
     actions: list[str] = []
-    services = Services(None, None, RosLink(), {}, lambda _action, params: actions.append(params["scene"]))
+    services = Services(
+        None, None, RosLink(), CameraMounts(), lambda _action, params: actions.append(params["scene"])
+    )
     publisher = rospy.Publisher(spec.ros, String, queue_size=1, latch=True)
     publisher.publish(String(SENSORS))
     bridge = RosToSim(spec, services)

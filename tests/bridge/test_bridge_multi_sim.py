@@ -39,9 +39,10 @@ def test_two_simulators_share_one_master_without_name_collisions(rig_factory):
     pubs, _subs, _srvs = rosgraph.Master("/probe").getSystemState()
     ours = {t for t, nodes in pubs if {"/bridge_sim1", "/bridge_sim2"} & set(nodes)}
     assert {t for t in ours if t.startswith("/sim1/")} and {t for t in ours if t.startswith("/sim2/")}
-    # nothing of either node is left un-namespaced (only the node-private status and /diagnostics, /tf)
+    # nothing of either node is left un-namespaced (only the node-private status and /diagnostics, tf)
     assert {t for t in ours if not t.startswith(("/sim1/", "/sim2/"))} <= {
         "/tf",
+        "/tf_static",
         "/diagnostics",
         "/rosout",
         "/airsim_mapper/bridge_sim1/status",

@@ -34,6 +34,7 @@ EXPECTED_PUBLISHED = {
     f"{ROBOT}/radar1/radar_tracks": "radar_msgs/RadarTracks",
     "/airsim_streaming_camera/image_raw": "sensor_msgs/Image",
     "/tf": "tf2_msgs/TFMessage",
+    "/tf_static": "tf2_msgs/TFMessage",
     "/clock": "rosgraph_msgs/Clock",
     f"{ROBOT}/odom": "nav_msgs/Odometry",
     f"{ROBOT}/collision": "geometry_msgs/PointStamped",
@@ -229,6 +230,24 @@ def test_tf_resolves_every_documented_frame_from_map(rig: Stack):
     # The camera frame is the body frame moved by the camera's mount (0.2, 0, 0.1) in FRD.
     t = down.transform.translation
     assert (t.x - body.x, t.y - body.y, t.z - body.z) == pytest.approx((0.2, 0.0, 0.1), abs=0.02)
+
+
+def test_camera_and_sensor_frames_are_static_mounts_on_the_robot_and_not_sent_per_pose(rig: Stack):
+    import rospy
+    from tf2_msgs.msg import TFMessage
+
+    latched = rospy.wait_for_message("/tf_static", TFMessage, timeout=20)
+    mounts = {t.child_frame_id: t.header.frame_id for t in latched.transforms}
+    cameras = {
+        f"airsim_node/Drone1/DownCamera/{kind}{end}" for kind in IMAGE_TYPES for end in ("", "_optical")
+    }
+    sensors = {"airsim_node/Drone1/lidar1", "airsim_node/Drone1/radar1", "airsim_node/Drone1/DistanceSensor"}
+    assert cameras | sensors <= set(mounts)
+    assert set(mounts.values()) == {"airsim_node/Drone1"}  # each one relative to the robot's frame
+    moving = {
+        t.child_frame_id for _ in range(20) for t in rospy.wait_for_message("/tf", TFMessage, 10).transforms
+    }
+    assert "airsim_node/Drone1" in moving and not moving & set(mounts)
 
 
 def test_camera_pose_topic_is_the_body_pose_moved_by_the_mount(rig: Stack):

@@ -17,10 +17,10 @@ def test_enu_property_follows_the_convention():
     assert ConvertContext(convention="enu").enu is True
 
 
-def test_each_context_gets_its_own_shared_state():
+def test_each_context_gets_its_own_state():
     first, second = ConvertContext(), ConvertContext()
-    first.shared["k"] = 1
-    assert "k" not in second.shared
+    first.state["k"] = 1
+    assert "k" not in second.state and not first.mounts
 
 
 def test_unknown_convention_is_rejected():

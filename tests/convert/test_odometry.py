@@ -21,13 +21,13 @@ def sim_pose(t_s: float, position, yaw: float = 0.0):
     }
 
 
-def context(convention: str, shared=None, child="Drone1/base_link") -> ConvertContext:
+def context(convention: str, state=None, child="Drone1/base_link") -> ConvertContext:
     return ConvertContext(
         frame_id="map",
         convention=convention,
         params={"child_frame_id": child},
         variables={"robot_name": "Drone1"},
-        shared={} if shared is None else shared,
+        state={} if state is None else state,
     )
 
 
@@ -70,11 +70,10 @@ def test_a_pose_with_the_same_stamp_keeps_the_last_twist():
     assert twist(paused) == twist(moving)
 
 
-def test_each_robot_keeps_its_own_history():
-    shared: dict = {}
-    odometry(sim_pose(1.0, (0.0, 0.0, 0.0)), context("ned", shared))
+def test_each_bridge_keeps_its_own_history():
+    odometry(sim_pose(1.0, (0.0, 0.0, 0.0)), context("ned"))
     other = ConvertContext(
-        convention="ned", params={"child_frame_id": "r2"}, variables={"robot_name": "Drone2"}, shared=shared
+        convention="ned", params={"child_frame_id": "r2"}, variables={"robot_name": "Drone2"}
     )
     assert twist(odometry(sim_pose(2.0, (5.0, 0.0, 0.0)), other))[0] == [0.0, 0.0, 0.0]
 

@@ -82,13 +82,13 @@ def test_pose_with_zero_quaternion_is_rejected(ned):
         pose_stamped(sim_pose(q=(0.0, 0.0, 0.0, 0.0)), ned)
 
 
-def camera_ctx(convention="ned", origin=None, shared=None):
+def camera_ctx(convention="ned", origin=None, mounts=None):
     return ConvertContext(
         frame_id="map",
         convention=convention,
         source={"camera_origin": origin or {"xyz": "1 0 0", "rpy-deg": "0 -90 0"}},
         variables={"robot_name": "Drone1", "camera_name": "DownCamera"},
-        shared={} if shared is None else shared,
+        mounts={} if mounts is None else mounts,
     )
 
 
@@ -109,15 +109,15 @@ def test_camera_pose_without_a_mount_is_the_robot_pose():
 
 
 def test_camera_pose_uses_a_commanded_override_instead_of_the_mount():
-    shared = {("camera_pose", "Drone1", "DownCamera"): (np.array([0.0, 0.0, 2.0]), np.array([1.0, 0, 0, 0]))}
-    msg = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), camera_ctx(shared=shared))
+    mounts = {("camera_pose", "Drone1", "DownCamera"): (np.array([0.0, 0.0, 2.0]), np.array([1.0, 0, 0, 0]))}
+    msg = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), camera_ctx(mounts=mounts))
     assert xyz(msg) == [0.0, 0.0, 2.0]
     assert wxyz(msg) == [1.0, 0.0, 0.0, 0.0]
 
 
 def test_camera_pose_override_for_another_camera_is_ignored():
-    shared = {("camera_pose", "Drone1", "Other"): (np.zeros(3), np.array([1.0, 0, 0, 0]))}
-    msg = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), camera_ctx(shared=shared))
+    mounts = {("camera_pose", "Drone1", "Other"): (np.zeros(3), np.array([1.0, 0, 0, 0]))}
+    msg = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), camera_ctx(mounts=mounts))
     assert xyz(msg) == pytest.approx([1.0, 0.0, 0.0])
 
 
@@ -150,12 +150,13 @@ def test_a_mount_is_parsed_once_and_its_shared_arrays_cannot_be_changed():
 
 def test_a_camera_pose_command_feeds_the_published_camera_pose_in_both_conventions():
     for convention in ("ned", "enu"):
-        ctx = camera_ctx(convention)
+        mounts: dict = {}
+        ctx = camera_ctx(convention, mounts=mounts)
         command = PoseStamped(
             pose=Pose(position=Point(0.5, 0.25, 0.1), orientation=Quaternion(0.0, 0.0, 0.0, 1.0))
         )
         params = camera_desired_pose(command, ctx)
-        ctx.shared[camera_pose_key("Drone1", "DownCamera")] = camera_pose_override(params)
+        mounts[camera_pose_key("Drone1", "DownCamera")] = camera_pose_override(params)
         # a robot at the world origin with identity attitude in NED is the identity in NED, and faces
         # north (yaw +90) in ENU; the camera is offset along the robot's axes in the command's convention
         out = camera_pose(sim_pose(position=(0.0, 0.0, 0.0)), ctx)

@@ -90,3 +90,27 @@ def test_the_frame_header_is_read_from_str_or_bin_topic_and_body_forms():
     assert parse_frame_header(b"\x92\x02\xa1a") is None
     assert parse_frame_header(msgpack.packb([2, 5, b"x"])) is None
     assert parse_frame_header(msgpack.packb([2, "/t", b"x"]) + b"junk") is None
+
+
+def test_a_received_view_decodes_exactly_as_the_same_bytes_without_copying_the_pixels():
+    for frame in (lidar_frame(), image_frame(width=320, height=240)):
+        view = memoryview(frame)  # as the receive loop holds a frame: a view of the transport's message
+        header = parse_frame_header(view)
+        assert header == parse_frame_header(frame)
+        from_view = decode_map(view, header.body_start, header.body_end, views=True)
+        from_bytes = decode_map(frame, header.body_start, header.body_end, views=True)
+        assert list(from_view) == list(from_bytes)
+        for key, value in from_bytes.items():
+            if isinstance(value, np.ndarray):
+                np.testing.assert_array_equal(from_view[key], value)
+            elif isinstance(value, memoryview):
+                assert from_view[key].obj is frame and bytes(from_view[key]) == bytes(value)
+            else:
+                assert from_view[key] == value
+
+
+def test_a_view_with_one_odd_element_falls_back_as_bytes_do():
+    floats = [0.5] * 99 + ["x"]
+    body = msgpack.packb({"floats": floats, "big": list(range(70000)), "tail": 7}, use_bin_type=True)
+    assert decode_map(memoryview(body))["floats"] == floats
+    assert decode_map(memoryview(body))["tail"] == 7  # after a value longer than one read

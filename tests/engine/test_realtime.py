@@ -337,3 +337,12 @@ def test_only_an_engine_asked_to_tune_changes_the_process() -> None:
     tuned = subprocess.run([sys.executable, "-c", ENGINE_PROBE, "tune"], env=env, **run).stdout.split()
     assert float(tuned[0]) == pytest.approx(SWITCH_INTERVAL_S) and tuned[1] == "PromptQueuedConnection"
     assert tuned[2] in ("kept", "1") and tuned[3] == "True"  # "kept" on a one-core host
+
+
+@pytest.mark.live
+def test_keep_frame_buffers_fixes_glibcs_thresholds_unless_tuning_is_off() -> None:
+    probe = "from airsim_mapper.tuning import keep_frame_buffers; print(keep_frame_buffers())"
+    run = {"capture_output": True, "text": True, "check": True}
+    assert subprocess.run([sys.executable, "-c", probe], **run).stdout.split() == ["True"]
+    env = {**os.environ, "AIRSIM_MAPPER_NO_TUNING": "1"}
+    assert subprocess.run([sys.executable, "-c", probe], env=env, **run).stdout.split() == ["False"]

@@ -15,6 +15,7 @@ from std_srvs.srv import TriggerRequest
 from airsim_mapper.convert.pose import camera_pose_key
 from airsim_mapper.engine.bridges import Services, SimToRos, StreamingImage
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.ros_to_sim import RosService, RosToSim
 from airsim_mapper.engine.runners import build
 from airsim_mapper.mapping.expand import expand
@@ -45,7 +46,9 @@ def ros() -> FakeRos:
 @pytest.fixture
 def services(sim: FakeSimLink, ros: FakeRos) -> Services:
     actions: list[tuple[str, dict]] = []
-    found = Services(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda a, p: actions.append((a, p)))
+    found = Services(
+        sim, StreamHub(sim, ros.send_tf), ros, CameraMounts(), lambda a, p: actions.append((a, p))
+    )
     found.actions = actions  # type: ignore[attr-defined]
     return found
 
@@ -140,7 +143,7 @@ def test_a_camera_pose_command_is_remembered_once_the_simulator_took_it(specs, s
     goal.pose.position.x = 2.0
     ros.subscribers[spec.ros].handler(goal)
     assert [method for method, _ in sim.calls] == [spec.sim]
-    assert camera_pose_key("Drone1", "DownCamera") in services.shared
+    assert camera_pose_key("Drone1", "DownCamera") in services.mounts
 
 
 def test_load_scene_asks_the_engine_for_its_action(specs, services, sim, ros):

@@ -79,7 +79,11 @@ def test_json_format_prints_one_array_of_bridges_with_the_documented_keys(capsys
         "sensor_pose",
         None,
     )
-    assert lidar["tf"] == {"parent": "map", "child": "airsim_node/Drone1/lidar1"}
+    assert lidar["tf"] == {
+        "parent": "airsim_node/Drone1",
+        "child": "airsim_node/Drone1/lidar1",
+        "static": True,
+    }
     assert {row["direction"] for row in rows} == {"sim_to_ros", "ros_to_sim"}
 
 

@@ -11,6 +11,7 @@ from simconfigs import EXAMPLE_SCENES, both_configs, scenes_of
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
+from airsim_mapper.mapping.model import TfSpec
 from airsim_mapper.scene import read_scene
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
@@ -322,9 +323,8 @@ def test_radar_bridges_use_the_radar_frame_and_its_tf_comes_from_the_towers_pose
     ]
     assert (radar[0].tf, radar[1].tf) == (None, None)
     (frame,) = [b for b in bridges if b.name == "radar_tf[RadarTower1/radar1]"]
-    assert (frame.sim, frame.converter, frame.tf.child, frame.options.lazy) == (
+    assert (frame.sim, frame.converter, frame.tf) == (
         f"/Sim/{RADAR_SCENE_ID[sim_config]}/robots/RadarTower1/actual_pose",
         "sensor_pose",
-        "airsim_node/RadarTower1/radar1",
-        False,
+        TfSpec("airsim_node/RadarTower1", "airsim_node/RadarTower1/radar1", static=True),
     )

@@ -71,7 +71,7 @@ def test_topics_prints_one_markdown_row_per_bridge_with_ros_type_direction_sim_f
         "`/Sim/SceneDroneSensors/Pause` | - | `pause[SceneDroneSensors]` |"
     ) in rows
     assert (
-        "| tf `map` → `Drone1/Chase/scene_camera_optical` | - | sim → ROS | "
+        "| tf_static `Drone1/base_link` → `Drone1/Chase/scene_camera_optical` | - | sim → ROS | "
         "`/Sim/SceneDroneSensors/robots/Drone1/actual_pose` | - | "
         "`camera_optical_tf[Drone1/Chase/scene_camera]` |"
     ) in rows

@@ -13,6 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from airsim_mapper.engine.bridges import Services, SimToRos
+from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.runners import build
 from airsim_mapper.engine.streams import Stream
 from airsim_mapper.mapping.expand import expand
@@ -84,8 +85,11 @@ class NoSim:
 @pytest.fixture(scope="module")
 def bridges() -> list[SimToRos]:
     specs = expand(load_mapping(DEFAULT_MAPPING), read_scene(PROJECT_SIM_CONFIG, SCENE), "fuzz", "")
-    services = Services(NoSim(), NoSim(), FakeRos(), {}, lambda *_: None)  # "ros" stamps read its clock
+    services = Services(
+        NoSim(), NoSim(), FakeRos(), CameraMounts(), lambda *_: None
+    )  # "ros" stamps read its clock
     out = [build(spec, services) for spec in specs if spec.direction == SIM_TO_ROS]
+    out = [bridge for bridge in out if isinstance(bridge, SimToRos)]  # static mounts take no messages
     assert {b.spec.converter for b in out} >= {"pose", "image", "pointcloud", "radar_scan", "camera_info"}
     return out
 

@@ -24,7 +24,15 @@ SCALE_DRONES = (1, 2, 5, 10)
 
 def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
     """Every end-to-end figure. Each bridge session measures at most one heavy topic (docs/performance.md)."""
-    out: dict[str, Any] = {"baselines": {}, "bridge": {}, "pose": {}, "client_pose": {}, "scale": {}}
+    out: dict[str, Any] = {
+        "baselines": {},
+        "bridge": {},
+        "pose": {},
+        "client_pose": {},
+        "scale": {},
+        "forwarder": {},
+    }
+    floor = out["forwarder"]
     base = out["baselines"]
     base["rospy_image"] = bench.rospy_baseline("image", CAMERA_HZ)
     base["pynng_image"] = bench.pynng_baseline("image", CAMERA_HZ)
@@ -33,6 +41,8 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
 
     single = bench.scene("single", 1, scenes.CameraSetup(1920, 1080, 1 / CAMERA_HZ, (0, 1)), lidar=True)
     load = bench.scene("load", 1, scenes.CameraSetup(1920, 1080, 1 / 60.0, (0,)))
+    hd = bench.scene("hd720", 1, scenes.CameraSetup(1280, 720, 1 / CAMERA_HZ, (0,)))
+    camera_topics = [scenes.image_topic(1), scenes.pose_topic(1)]
 
     def profile(name: str) -> str | None:
         return str(profile_dir / f"bridge_{name}.prof") if profile_dir else None
@@ -40,7 +50,16 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
     with bench.bridge_session(single, profile=profile("camera")) as session:
         out["pose"]["idle"] = session.probe("pose_idle", [scenes.pose_topic(1)])
         # the camera at its nominal 30 Hz, with pose measured alongside: pose under nominal camera load
-        out["bridge"]["camera"] = session.probe("camera", [scenes.image_topic(1), scenes.pose_topic(1)])
+        out["bridge"]["camera"] = session.probe("camera", camera_topics)
+    # The floor: the same frames through the client's own receive loop into plain rospy publishers.
+    with bench.forwarder_session(single) as session:
+        floor["pose_idle"] = session.probe("forwarder_pose_idle", [scenes.pose_topic(1)])
+    with bench.forwarder_session(single, camera=True) as session:
+        floor["camera"] = session.probe("forwarder_camera", camera_topics)
+    with bench.bridge_session(hd) as session:
+        out["bridge"]["camera_720p"] = session.probe("camera_720p", camera_topics)
+    with bench.forwarder_session(hd, camera=True) as session:
+        floor["camera_720p"] = session.probe("forwarder_camera_720p", camera_topics)
     # The same idle pose stream with a mapping that drops the per-camera frames: what those frames cost.
     lean = scenes.write_mapping_without_camera_frames(bench.config_dir)
     with bench.bridge_session(single, node_args=("--mapping", str(lean))) as session:
@@ -54,6 +73,8 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
     loaded = [scenes.pose_topic(1), scenes.image_topic(1)]
     with bench.bridge_session(load, profile=profile("load")) as session:  # 1080p at 60 Hz: saturating
         out["pose"]["camera_load"] = session.probe("pose_load", loaded)
+    with bench.forwarder_session(load, camera=True) as session:
+        floor["camera_load"] = session.probe("forwarder_pose_load", loaded)
     with bench.bridge_session(load, runner="mission", profile=profile("mission")) as session:
         out["pose"]["camera_load_mission"] = session.probe("pose_load_mission", loaded)
 
@@ -62,6 +83,9 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         topics = [t for i in range(1, drones + 1) for t in (scenes.pose_topic(i), scenes.image_topic(i))]
         with bench.bridge_session(scene, profile=profile(f"scale{drones}")) as session:
             out["scale"][str(drones)] = session.probe(f"scale{drones}", topics)
+        if drones == SCALE_DRONES[-1]:
+            with bench.forwarder_session(scene, camera=True) as session:
+                floor["scale"] = session.probe(f"forwarder_scale{drones}", topics)
     return out
 
 

@@ -18,7 +18,7 @@ from typing import Any
 
 from tools.bench import scenes
 from tools.bench.baselines import RAW_TOPIC
-from tools.bench.sampling import cpu_share, sample
+from tools.bench.sampling import cpu_share, fault_rate, sample
 from tools.rig import Child, Rig, free_port, port_open, wait_until
 
 FIRST_MESSAGE_TIMEOUT_S = 120.0
@@ -45,10 +45,11 @@ class Session:
     bench: Bench
     server: Child
     node: Child
+    role: str = "bridge"  # the node's name in the results: bridge, or forwarder (the floor)
 
     def probe(self, label: str, topics: Sequence[str]) -> dict[str, Any]:
         """Rate and latency of `topics`, with the CPU (cores) and RSS of the node and server meanwhile."""
-        return self.bench.measure(label, topics, {"bridge": self.node, "server": self.server})
+        return self.bench.measure(label, topics, {self.role: self.node, "server": self.server})
 
 
 @dataclass
@@ -99,6 +100,7 @@ class Bench:
         for name in watched:
             result[f"{name}_cpu_cores"] = cpu_share(before[name], after[name])
             result[f"{name}_rss_mb"] = after[name].rss_mb
+            result[f"{name}_minor_faults_per_s"] = fault_rate(before[name], after[name])
         return result
 
     # -- the bridge
@@ -159,6 +161,33 @@ class Bench:
                 self.procs.stop(node)
             self.procs.stop(server)
             time.sleep(0.5)  # let the master drop the node's registrations
+
+    @contextlib.contextmanager
+    def forwarder_session(self, scene_file: str, camera: bool = False) -> Iterator[Session]:
+        """The bare forwarder (forwarder.py) on a replay server: the floor of the bridge's figures."""
+        server, topics_port, services_port = self._replay_server("WARNING")
+        forwarder: Child | None = None
+        try:
+            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
+            forwarder = self.module(
+                "forwarder",
+                "tools.bench.forwarder",
+                "--topicsport",
+                str(topics_port),
+                "--servicesport",
+                str(services_port),
+                "--simconfigpath",
+                str(self.config_dir),
+                "--scene",
+                scene_file,
+                *(["--camera"] if camera else []),
+            )
+            yield Session(self, server, forwarder, role="forwarder")
+        finally:
+            if forwarder is not None:
+                self.procs.stop(forwarder)
+            self.procs.stop(server)
+            time.sleep(0.5)
 
     # -- baselines
 

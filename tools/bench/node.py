@@ -2,11 +2,13 @@
 
 `--as node` (default) runs the shipped node (`airsim_mapper.cli.node.main`); `--as mission` runs a mission
 script as `scripts/hello_ros.py` builds it: the client, then `World`, then the wrapper, which takes over
-the client's receive thread. `--decode client` is a comparison baseline, not a shipped path: every frame
-goes through msgpack, as the bare client decodes it. `--profile OUT.prof` cProfiles every thread.
+the client's receive thread. Comparison baselines, not shipped paths: `--decode client` sends every frame
+through msgpack, as the bare client decodes it; `--receive copy` receives with pynng's `recv` (two copies
+of each frame); `--malloc glibc` leaves glibc's adaptive malloc thresholds. `--profile OUT.prof` cProfiles
+every thread.
 
-    python -m tools.bench.node [--as node|mission] [--decode bridge|client] [--profile OUT.prof]
-        <node arguments>
+    python -m tools.bench.node [--as node|mission] [--decode bridge|client] [--receive view|copy]
+        [--malloc fixed|glibc] [--profile OUT.prof] <node arguments>
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import sys
 import threading
 from typing import Any
 
+from airsim_mapper import wrapper
 from airsim_mapper.cli import node
 from airsim_mapper.engine import receive
 
@@ -90,6 +93,10 @@ def main(argv: list[str] | None = None) -> int:
     profile_path = _option(args, "--profile", None)
     if decode == "client":
         receive.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
+    if _option(args, "--receive", "view") == "copy":  # comparison: pynng's own recv, which copies twice
+        receive.receive_frame = lambda sock: sock.recv()
+    if _option(args, "--malloc", "fixed") == "glibc":  # comparison: glibc's adaptive malloc thresholds
+        wrapper.keep_frame_buffers = lambda: False
     profiles = profile_all_threads() if profile_path else []
     try:
         return mission(args) if runner == "mission" else node.main([sys.argv[0], *args])

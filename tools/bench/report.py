@@ -120,6 +120,11 @@ def e2e_table(e2e: dict[str, Any]) -> str:
         names = list(load["topics"])
         add(f"{label}: pose @100, 1080p camera @60 load", load, "bridge", names[0])
         add("  (the load: camera 1080p @60)", load, "bridge", names[1])
+    floor = e2e.get("forwarder", {})
+    for key, label in FLOOR_ROWS:
+        if key in floor and key != "scale":  # the ten drones' floor is in the table below
+            for name in floor[key]["topics"]:
+                add(f"bare forwarder: {label}, {_kind(name)}", floor[key], "forwarder", name)
     text = _table(header, rows)
     scale_rows = []
     for drones, result in e2e["scale"].items():
@@ -150,7 +155,147 @@ def e2e_table(e2e: dict[str, Any]) -> str:
         ],
         scale_rows,
     )
-    return text + "\n\n" + scale
+    return text + "\n\n" + scale + ("\n\n" + floor_table(e2e) if floor else "")
+
+
+# The bare forwarder's sessions (tools/bench/forwarder.py) and what they carry.
+FLOOR_ROWS = (
+    ("pose_idle", "pose @100"),
+    ("camera", "1080p camera @30 + pose"),
+    ("camera_720p", "720p camera @30 + pose"),
+    ("camera_load", "1080p camera @60 + pose"),
+    ("scale", "10 drones"),
+)
+
+
+def _kind(topic_name: str) -> str:
+    return "pose" if topic_name.endswith("actual_pose") else "image"
+
+
+def _of_kind(result: dict[str, Any], kind: str) -> list[dict[str, Any]]:
+    return [t for name, t in result["topics"].items() if _kind(name) == kind]
+
+
+def _worst_pose(result: dict[str, Any]) -> tuple[float, float]:
+    """(slowest rate Hz, largest p99 ms) over the result's pose topics."""
+    poses = _of_kind(result, "pose")
+    return min(t["rate_hz"] for t in poses), max(t.get("latency_p99_ms", float("inf")) for t in poses)
+
+
+def _ratio(ours: float | None, floor: float | None) -> float | None:
+    return None if ours is None or not floor else ours / floor
+
+
+def _pairs(e2e: dict[str, Any]) -> list[tuple[str, str, dict[str, Any], dict[str, Any]]]:
+    """(key, label, bridge result, forwarder result) for every case measured through both."""
+    floor = e2e.get("forwarder", {})
+    bridge = {
+        "pose_idle": e2e["pose"].get("idle"),
+        "camera": e2e["bridge"].get("camera"),
+        "camera_720p": e2e["bridge"].get("camera_720p"),
+        "camera_load": e2e["pose"].get("camera_load"),
+        "scale": e2e["scale"].get(max(e2e["scale"], key=int)) if e2e["scale"] else None,
+    }
+    return [
+        (key, label, bridge[key], floor[key])
+        for key, label in FLOOR_ROWS
+        if key in floor and bridge.get(key) is not None
+    ]
+
+
+def frame_cpu_ms(result: dict[str, Any], idle: dict[str, Any], role: str) -> float | None:
+    """CPU ms per image frame above the same process's pose-only CPU."""
+    rate = sum(t["rate_hz"] for t in _of_kind(result, "image"))
+    return per_message_cpu_ms(result[f"{role}_cpu_cores"] - idle[f"{role}_cpu_cores"], rate)
+
+
+def floor_table(e2e: dict[str, Any]) -> str:
+    """Each case through the bridge and through the bare forwarder, in the same run, and their ratios."""
+    rows = []
+    for _key, label, ours, floor in _pairs(e2e):
+        cores, floor_cores = ours["bridge_cpu_cores"], floor["forwarder_cpu_cores"]
+        (rate, p99), (floor_rate, floor_p99) = _worst_pose(ours), _worst_pose(floor)
+        rows.append(
+            [
+                label,
+                f"{cores:.3f} / {floor_cores:.3f}",
+                _x(_ratio(cores, floor_cores)),
+                f"{rate:.0f} / {floor_rate:.0f}",
+                f"{_ms(p99)} / {_ms(floor_p99)}",
+                _x(_ratio(p99, floor_p99)),
+                f"{ours.get('bridge_minor_faults_per_s', 0):.0f} / "
+                f"{floor.get('forwarder_minor_faults_per_s', 0):.0f}",
+            ]
+        )
+    return _table(
+        [
+            "bridge / bare forwarder (same frames, same run)",
+            "CPU cores",
+            "CPU ratio",
+            "pose Hz (slowest)",
+            "pose p99 ms (worst)",
+            "p99 ratio",
+            "minor faults/s",
+        ],
+        rows,
+    )
+
+
+def _x(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}x"
+
+
+def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
+    """The targets against the bare forwarder (issue #30), for the cases measured through both."""
+    pairs = {key: (ours, floor) for key, _label, ours, floor in _pairs(e2e)}
+    out: list[dict[str, Any]] = []
+    if "pose_idle" in pairs:
+        ours, floor = pairs["pose_idle"]
+        ratio = _ratio(
+            per_message_cpu_ms(ours["bridge_cpu_cores"], _worst_pose(ours)[0]),
+            per_message_cpu_ms(floor["forwarder_cpu_cores"], _worst_pose(floor)[0]),
+        )
+        out.append(_limit("pose only: bridge CPU per pose / the forwarder's", ratio, 1.3, "x"))
+    if "camera" in pairs and "pose_idle" in pairs:
+        (ours, floor), (ours_idle, floor_idle) = pairs["camera"], pairs["pose_idle"]
+        ours_ms = frame_cpu_ms(ours, ours_idle, "bridge")
+        floor_ms = frame_cpu_ms(floor, floor_idle, "forwarder")
+        note = f"bridge {_ms(ours_ms)} ms, forwarder {_ms(floor_ms)} ms (above each one's pose-only CPU)"
+        out.append(
+            _limit(
+                "1080p frame: bridge CPU per frame / the forwarder's",
+                _ratio(ours_ms, floor_ms),
+                1.2,
+                "x",
+                note,
+            )
+        )
+    for key, label in (("camera", "1080p camera @30 + pose"), ("camera_720p", "720p camera @30 + pose")):
+        if key in pairs:
+            ours, floor = pairs[key]
+            ratio = _ratio(ours["bridge_cpu_cores"], floor["forwarder_cpu_cores"])
+            out.append(_limit(f"{label}: bridge CPU / the forwarder's", ratio, 1.2, "x"))
+    if "camera" in pairs:
+        ours, floor = pairs["camera"]
+        ratio = _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])
+        out.append(_limit("pose p99 under a 1080p camera @30 / the forwarder's", ratio, 0.8, "x"))
+    if "camera_load" in pairs:
+        ours, floor = pairs["camera_load"]
+        rate = _worst_pose(ours)[0]
+        out.append(_target("pose rate under a 1080p camera @60", rate, 98.0, rate >= 98.0, "Hz"))
+        ratio = _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])
+        out.append(_limit("pose p99 under a 1080p camera @60 / the forwarder's", ratio, 1.0, "x"))
+    if "scale" in pairs:
+        ours, floor = pairs["scale"]
+        drones = len(_of_kind(ours, "pose"))
+        out.append(_limit(f"{drones} drones: bridge CPU", ours["bridge_cpu_cores"], 0.25, "cores"))
+        out.append(_limit(f"{drones} drones: worst pose p99", _worst_pose(ours)[1], 4.0, "ms"))
+    return out
+
+
+def _limit(name: str, value: float | None, limit: float, unit: str, note: str = "") -> dict[str, Any]:
+    """A target met when `value` is at most `limit` (not applicable without a value)."""
+    return _target(name, value, limit, None if value is None else value <= limit, unit, note)
 
 
 def _target(
@@ -265,6 +410,7 @@ def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
                 f"rate {pose['rate_hz']:.0f} Hz loaded vs {pose_idle['rate_hz']:.0f} Hz idle",
             )
         )
+    out += floor_targets(e2e)
     scale = e2e["scale"]
     if scale:
         counts = sorted(int(k) for k in scale)

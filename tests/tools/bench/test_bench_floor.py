@@ -1,0 +1,91 @@
+"""The bench's floor: the bare forwarder carries the frames, and every comparison is a ratio to it."""
+
+from __future__ import annotations
+
+import pytest
+
+from tools.bench import report, scenes
+from tools.bench.e2e import Bench
+
+POSE, IMAGE = scenes.pose_topic(1), scenes.image_topic(1)
+
+
+def _result(role: str, cores: float, topics: dict[str, tuple[float, float]]) -> dict:
+    """A probe result: {topic: (rate Hz, p99 ms)} and the CPU of `role`."""
+    return {
+        f"{role}_cpu_cores": cores,
+        "topics": {
+            name: {"rate_hz": rate, "latency_p50_ms": p99 / 2, "latency_p99_ms": p99, "count": 1}
+            for name, (rate, p99) in topics.items()
+        },
+    }
+
+
+def _e2e(bridge_scale_cores: float = 0.2) -> dict:
+    drones = {scenes.pose_topic(i): (100.0, 3.0) for i in (1, 2)}
+    return {
+        "pose": {
+            "idle": _result("bridge", 0.05, {POSE: (100.0, 1.0)}),
+            "camera_load": _result("bridge", 0.6, {POSE: (99.0, 9.0), IMAGE: (60.0, 20.0)}),
+        },
+        "bridge": {
+            "camera": _result("bridge", 0.35, {IMAGE: (30.0, 20.0), POSE: (100.0, 6.0)}),
+            "camera_720p": _result("bridge", 0.2, {IMAGE: (30.0, 10.0), POSE: (100.0, 3.0)}),
+        },
+        "scale": {"1": {}, "2": _result("bridge", bridge_scale_cores, drones)},
+        "forwarder": {
+            "pose_idle": _result("forwarder", 0.04, {POSE: (100.0, 1.0)}),
+            "camera": _result("forwarder", 0.24, {IMAGE: (30.0, 15.0), POSE: (100.0, 10.0)}),
+            "camera_720p": _result("forwarder", 0.1, {IMAGE: (30.0, 8.0), POSE: (100.0, 5.0)}),
+            "camera_load": _result("forwarder", 0.5, {POSE: (80.0, 10.0), IMAGE: (60.0, 20.0)}),
+            "scale": _result("forwarder", 0.1, drones),
+        },
+    }
+
+
+def test_every_case_through_both_is_printed_with_its_ratio_to_the_forwarder():
+    table = report.floor_table(_e2e())
+    lines = {line.split("  ")[0]: line for line in table.splitlines()[2:]}
+    assert set(lines) == {label for _, label in report.FLOOR_ROWS}
+    assert "0.350 / 0.240" in lines["1080p camera @30 + pose"] and "1.46x" in lines["1080p camera @30 + pose"]
+    assert "6.00 / 10.00" in lines["1080p camera @30 + pose"] and "0.60x" in lines["1080p camera @30 + pose"]
+    assert "2.00x" in lines["720p camera @30 + pose"]
+
+
+def test_the_forwarder_targets_are_judged_on_the_ratios():
+    verdicts = {t["target"]: (round(t["value"], 3), t["met"]) for t in report.floor_targets(_e2e())}
+    assert verdicts == {
+        "pose only: bridge CPU per pose / the forwarder's": (1.25, True),
+        # (0.35 - 0.05) / 30 against (0.24 - 0.04) / 30
+        "1080p frame: bridge CPU per frame / the forwarder's": (1.5, False),
+        "1080p camera @30 + pose: bridge CPU / the forwarder's": (1.458, False),
+        "720p camera @30 + pose: bridge CPU / the forwarder's": (2.0, False),
+        "pose p99 under a 1080p camera @30 / the forwarder's": (0.6, True),
+        "pose rate under a 1080p camera @60": (99.0, True),
+        "pose p99 under a 1080p camera @60 / the forwarder's": (0.9, True),
+        "2 drones: bridge CPU": (0.2, True),
+        "2 drones: worst pose p99": (3.0, True),
+    }
+    over = {t["target"]: t["met"] for t in report.floor_targets(_e2e(bridge_scale_cores=0.3))}
+    assert over["2 drones: bridge CPU"] is False
+
+
+def test_without_forwarder_runs_there_is_no_floor_target():
+    e2e = _e2e()
+    e2e["forwarder"] = {}
+    assert report.floor_targets(e2e) == []
+
+
+@pytest.mark.live
+def test_the_bare_forwarder_carries_pose_and_images_from_the_replay_server(tmp_path):
+    bench = Bench(tmp_path, warmup_s=0.5, duration_s=2.0)
+    try:
+        scene = bench.scene("floor", 1, scenes.CameraSetup(320, 240, 0.1, (0,)))
+        with bench.forwarder_session(scene, camera=True) as session:
+            result = session.probe("floor", [POSE, IMAGE])
+    finally:
+        bench.close()
+    pose, image = result["topics"][POSE], result["topics"][IMAGE]
+    assert pose["rate_hz"] > 50 and image["rate_hz"] > 5
+    assert image["message_bytes"] > 320 * 240 * 3
+    assert result["forwarder_cpu_cores"] > 0 and result["server_cpu_cores"] > 0
