@@ -141,7 +141,6 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     from airsim_mapper.resources import shipped_mappings
 
     parser = argparse.ArgumentParser(
-        prog="projectairsim_node.py",
         description=__doc__.splitlines()[0],
         epilog="Each switch but --nodename, --no-watch, --shutdown-timeout and --max-frame-mb is also a "
         "private parameter (~address, ~mapping, ...); the command line wins over the parameter, the "

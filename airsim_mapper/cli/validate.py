@@ -18,7 +18,7 @@ from airsim_mapper.mapping.match import describe
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
-from airsim_mapper.resources import mapping_path
+from airsim_mapper.resources import mapping_path, sim_config_dir
 from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
@@ -39,7 +39,11 @@ def _parser() -> argparse.ArgumentParser:
         "running node's live reload would do)",
     )
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
-    parser.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
+    parser.add_argument(
+        "--simconfigpath",
+        default=None,
+        help="the scene config directory (default: ./sim_config/, else the package's sample scenes)",
+    )
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
     parser.add_argument("--format", choices=("text", "json"), default="text", help="output format")
@@ -94,6 +98,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
     try:
         args = _parser().parse_args(argv)
+        if hasattr(args, "simconfigpath"):
+            args.simconfigpath = sim_config_dir(args.simconfigpath)
     except SystemExit as stop:  # argparse has printed the usage message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
     try:
