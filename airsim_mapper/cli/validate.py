@@ -1,7 +1,8 @@
 """validate-mapping: check a mapping offline and, with --scene, show the bridges it makes.
 
-Exit status: 0 valid, 1 the mapping or scene is invalid (every problem on stderr as FILE:LINE:COL: message),
-2 usage errors or unreadable files.
+Exit status: 0 valid, 1 the mapping or scene is invalid (every problem on stderr as FILE:LINE:COL: message;
+with --format json, on stdout as {"problems": [{file, line, column, message, key}, ...]}), 2 usage errors
+or unreadable files.
 """
 
 from __future__ import annotations
@@ -46,7 +47,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
-    parser.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    parser.add_argument(
+        "--format",
+        choices=("text", "json"),
+        default="text",
+        help='output format; json also reports problems on stdout, as {"problems": [...]}',
+    )
     parser.add_argument(
         "--resolved",
         action="store_true",
@@ -127,7 +133,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace
         )
     except ConfigError as err:
-        print(str(err), file=sys.stderr)
+        if args.format == "json":
+            print(json.dumps({"problems": [problem.as_dict() for problem in err.problems]}, indent=2))
+        else:
+            print(str(err), file=sys.stderr)
         return EXIT_USAGE if err.unreadable else EXIT_INVALID
     _print_bridges(bridges, args.format)
     summary, warnings = match_report(mapping, scene, args.nodename, args.namespace)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 
 
 def _one_line(message: str) -> str:
@@ -21,12 +21,17 @@ class Problem:
     line: int
     column: int
     message: str
+    key: str = field(default="", compare=False)  # the key path in the file (`rules[3].queue_size`)
 
     def __str__(self) -> str:
         message = _one_line(self.message)
         if self.line <= 0:
             return f"{self.file}: {message}"
         return f"{self.file}:{self.line}:{max(self.column, 1)}: {message}"
+
+    def as_dict(self) -> dict[str, str | int]:
+        """The problem as plain data (validate-mapping --format json)."""
+        return asdict(self)
 
 
 class ConfigError(Exception):
