@@ -28,6 +28,10 @@ from airsim_mapper.mapping.model import BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
+# A service call waits for the simulator's reply this long past the call's own `timeout_sec` (by then the
+# simulator has answered, success or not); a call without one waits SIM_REPLY_S.
+REPLY_MARGIN_S = 5.0
+SIM_REPLY_S = 30.0
 
 
 @dataclass
@@ -361,7 +365,7 @@ class RosService(Bridge):
             require_finite(params)
             if self.info.runner == catalog.SERVE_ALL:
                 return self._on_all_robots(response, params)
-            result = self.services.sim.call(self.spec.sim, params)
+            result = self.services.sim.call(self.spec.sim, params, timeout=reply_timeout(params, SIM_REPLY_S))
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
             return _fill(response, False, str(exc))
@@ -375,10 +379,11 @@ class RosService(Bridge):
         robots = list(self.spec.source.get("robots", []))
         sim = self.services.sim
         calls = {robot: sim.call_async(f"{self.spec.sim}/{robot}/{method}", params) for robot in robots}
+        wait = reply_timeout(params, float(self.spec.params.get("timeout_s", 60.0)))
         failed = []
         for robot, future in calls.items():
             try:
-                if future.result(timeout=float(self.spec.params.get("timeout_s", 60.0))) in (False, None):
+                if future.result(timeout=wait) in (False, None):
                     failed.append(f"{robot}: false")
             except Exception as exc:
                 failed.append(f"{robot}: {exc}")
@@ -391,6 +396,17 @@ class RosService(Bridge):
     def stop(self) -> None:
         if self.service is not None:
             self.service.shutdown()
+
+
+def reply_timeout(params: dict, default: float) -> float:
+    """How long a service call waits for the simulator: the call's own `timeout_sec` (the simulator gives
+    up then and replies false) plus REPLY_MARGIN_S, so a land or move is never cut short on the bridge's
+    side while the robot still moves; `default` for a call without one."""
+    try:
+        limit = float(params.get("timeout_sec"))
+    except (TypeError, ValueError):
+        return default
+    return limit + REPLY_MARGIN_S if 0 < limit < float("inf") else default
 
 
 def _accepted(result: Any) -> bool:
