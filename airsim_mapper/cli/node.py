@@ -303,7 +303,7 @@ def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
 
     def on_request(_request: Any) -> Any:
         outcome = reloader.reload("~reload_mapping")
-        return TriggerResponse(success=outcome.applied, message=outcome.message)
+        return TriggerResponse(success=outcome.ok, message=outcome.message)
 
     rospy.Service("~reload_mapping", Trigger, on_request)
     if watch:

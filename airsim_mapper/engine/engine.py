@@ -129,6 +129,7 @@ class Engine:
             sim_time=self.sim_time,
         )
         self.bridges: dict[str, Bridge] = {}
+        self._refused: dict[str, str] = {}  # bridges that could not start (ROS refused them): name -> why
         self.scene: Scene | None = None
         self.world: Any = None
         self._load_world = load_world or _load_world
@@ -187,7 +188,10 @@ class Engine:
 
     def _start_bridges(self, specs: tuple[BridgeSpec, ...], names: set[str]) -> None:
         """Start the bridges of `specs` named in `names`, keeping `self.bridges` in the order of `specs`.
-        A bridge that cannot start is logged with its reason and left out; the others start."""
+        A bridge that cannot start (ROS refuses a name, say) is logged with its reason, left out and kept in
+        `refused_bridges()`; the others start."""
+        wanted = {s.name for s in specs}
+        self._refused = {n: why for n, why in self._refused.items() if n in wanted and n not in names}
         for spec in specs:
             if spec.name not in names:
                 continue
@@ -195,12 +199,16 @@ class Engine:
                 bridge = build(spec, self.services)
                 bridge.start()
             except Exception as exc:
-                log.error(
-                    "bridge %s could not start and stays off: %s: %s", spec.name, type(exc).__name__, exc
-                )
+                self._refused[spec.name] = f"{type(exc).__name__}: {exc}"
+                log.error("bridge %s could not start and stays off: %s", spec.name, self._refused[spec.name])
                 continue
             self.bridges[spec.name] = bridge
         self.bridges = {s.name: self.bridges[s.name] for s in specs if s.name in self.bridges}
+
+    def refused_bridges(self) -> dict[str, str]:
+        """The bridges of the running mapping that could not start, with why (for /diagnostics, reloads)."""
+        with self._lock:
+            return dict(self._refused)
 
     def _stop_scene_bridges(self, keep: dict[str, BridgeSpec]) -> None:
         """Stop every bridge except scene-independent ones whose spec is unchanged."""
