@@ -32,9 +32,10 @@ from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.resources import DEFAULT_MAPPING
+from airsim_mapper.ros_log import caller_logger, ros_logger
 from airsim_mapper.scene import Scene, scene_from_config
 
-log = logging.getLogger("rosout.airsim_mapper")
+log = ros_logger("airsim_mapper")
 
 
 class WrapperError(RuntimeError):
@@ -46,11 +47,11 @@ def redirect_client_log() -> None:
     as that logger's level lets them through."""
     from projectairsim.utils import projectairsim_log
 
-    client_log = projectairsim_log()
+    client_log = caller_logger(projectairsim_log())  # its records name their caller on /rosout too
     if any(getattr(f, "airsim_mapper", False) for f in client_log.filters):
         return
 
-    target = logging.getLogger("rosout.projectairsim")
+    target = ros_logger("projectairsim")
 
     def _redirect(record: logging.LogRecord) -> bool:
         if target.isEnabledFor(record.levelno):  # handle() alone would ignore the logger's level

@@ -36,12 +36,13 @@ from typing import TYPE_CHECKING, Any
 from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.names import resolve_namespace
+from airsim_mapper.ros_log import ros_logger
 
 if TYPE_CHECKING:
     from airsim_mapper.mapping.model import BridgeSpec
     from airsim_mapper.scene import Scene
 
-log = logging.getLogger("rosout.airsim_mapper.node")
+log = ros_logger("airsim_mapper.node")
 
 
 @dataclass(frozen=True)

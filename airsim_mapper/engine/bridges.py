@@ -8,7 +8,6 @@ alone, so adding a converter touches the catalogue and its own module, never thi
 from __future__ import annotations
 
 import dataclasses
-import logging
 import threading
 import time
 from collections.abc import Callable, MutableMapping
@@ -25,8 +24,9 @@ from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, RosLink,
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.mapping.model import BridgeSpec
+from airsim_mapper.ros_log import ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.bridge")
+log = ros_logger("airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
 # A service call waits for the simulator's reply this long past the call's own `timeout_sec` (by then the
 # simulator has answered, success or not); a call without one waits SIM_REPLY_S.

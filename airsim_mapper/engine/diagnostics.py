@@ -3,15 +3,15 @@ connection, published once a second. Names are the bridges' names, the same ones
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.bridges import Bridge, SimToRos
+from airsim_mapper.ros_log import ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.diagnostics")
+log = ros_logger("airsim_mapper.diagnostics")
 OK, WARN, ERROR = 0, 1, 2
 STALE_AFTER_S = 3.0
 

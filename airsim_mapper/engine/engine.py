@@ -44,9 +44,10 @@ from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.ros_log import ros_logger
 from airsim_mapper.scene import Scene, read_scene
 
-log = logging.getLogger("rosout.airsim_mapper.engine")
+log = ros_logger("airsim_mapper.engine")
 WATCHDOG_PERIOD_S = 0.05
 STATUS_PERIOD_S = 1.0
 RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)

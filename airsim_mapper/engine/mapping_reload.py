@@ -7,7 +7,6 @@ bridge stays as it was. If it is valid, the engine applies the difference only (
 
 from __future__ import annotations
 
-import logging
 import os
 import threading
 import time
@@ -18,8 +17,9 @@ from typing import Any
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.ros_log import ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.mapping")
+log = ros_logger("airsim_mapper.mapping")
 POLL_PERIOD_S = 0.25
 SETTLE_S = 0.05  # a file must stay the same this long before it is read (editors write in steps)
 Stamp = tuple[int, int, int] | None

@@ -11,13 +11,14 @@ publishers (through the node's own `publisherUpdate`, exactly as the master woul
 
 from __future__ import annotations
 
-import logging
 import threading
 import xmlrpc.client
 from collections.abc import Callable
 from dataclasses import dataclass
 
-log = logging.getLogger("rosout.airsim_mapper.master")
+from airsim_mapper.ros_log import ros_logger
+
+log = ros_logger("airsim_mapper.master")
 POLL_PERIOD_S = 1.0
 MASTER_CALLER = "/master"
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
-import logging
 import threading
 import time
 from collections.abc import Callable
@@ -35,8 +34,9 @@ from typing import Any
 
 from airsim_mapper.engine.fast_frames import decode_map
 from airsim_mapper.engine.health import PROBE_METHOD
+from airsim_mapper.ros_log import ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.sim")
+log = ros_logger("airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack

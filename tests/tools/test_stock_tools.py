@@ -1,5 +1,6 @@
 """Debian's own ROS tools, run by the system interpreter outside the venv, read every message the bridge
-publishes once the message space `make setup` builds (devel/setup.bash) is sourced: radar included."""
+publishes once the message space `make setup` builds (devel/setup.bash) is sourced: radar included. The
+node's /rosout records, as rosout logs them, name their calling file, function and line."""
 
 from __future__ import annotations
 
@@ -33,6 +34,11 @@ def test_the_stock_tools_read_radar_live_and_from_a_bag(launcher: Rig) -> None:
     )
     assert record.returncode == 0, record.stderr
     launcher.stop(node)  # from here on, only the bag publishes radar
+    # rosout's own log: every record of the node names the calling file, line and function
+    (rosout_log,) = [p for p in launcher.workdir.glob("ros_log/*/rosout.log") if p.parent.name != "latest"]
+    records = [line for line in rosout_log.read_text().splitlines() if " /projectairsim [" in line]
+    assert records and not [line for line in records if "threading.py" in line], records[:3]
+    assert any(" [node.py:" in line and "(main)]" in line for line in records), records[:3]
 
     info = stock_tool(launcher, f"/usr/bin/rosbag info {bag}")
     assert "radar_msgs/RadarScan" in info.stdout and "radar_msgs/RadarTracks" in info.stdout, info.stdout
