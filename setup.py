@@ -28,11 +28,14 @@ def _gen_msgs():
 
 class BuildWithMessages(build_py):
     def run(self) -> None:
+        editable = getattr(self, "editable_mode", False)
+        build_lib = Path(self.build_lib)
+        if not editable:  # a module removed from the source must not linger in build/ and so in the wheel
+            shutil.rmtree(build_lib / "airsim_mapper", ignore_errors=True)
         super().run()
-        if getattr(self, "editable_mode", False):
+        if editable:
             return
         gen_msgs = _gen_msgs()
-        build_lib = Path(self.build_lib)
         space = build_lib / "airsim_mapper" / "ros"
         gen_msgs.build_space(space)
         (build_lib / gen_msgs.PTH_NAME).write_text(f"airsim_mapper/ros/{gen_msgs.PYTHON_DIR.as_posix()}\n")
