@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from typing import TextIO
 
 from airsim_mapper.convert import catalog
-from airsim_mapper.mapping.errors import ConfigError
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.resources import ros_setup_file, sim_config_dir

@@ -23,8 +23,8 @@ from airsim_mapper.engine.replays import LatchedReplays, connection_header
 from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
 from airsim_mapper.engine.simtime import SimTimeWatch
+from airsim_mapper.logs import RateLimitedLog, ros_logger
 from airsim_mapper.mapping.model import BridgeSpec
-from airsim_mapper.ros_log import ros_logger
 
 log = ros_logger("airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
@@ -42,25 +42,6 @@ class BridgeStats:
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
     stale_dropped: int = 0  # messages taken before a lazy bridge attached (the simulator's cached frame)
-
-
-class Throttled:
-    """A warning logger that says each bridge's problem at most once per period, with a count."""
-
-    def __init__(self, name: str, period: float = WARN_PERIOD_S) -> None:
-        self.name = name
-        self.period = period
-        self._last = -1e9
-        self._suppressed = 0
-
-    def warn(self, message: str) -> None:
-        now = time.monotonic()
-        if now - self._last < self.period:
-            self._suppressed += 1
-            return
-        extra = f" ({self._suppressed} more since last report)" if self._suppressed else ""
-        self._last, self._suppressed = now, 0
-        log.warning("%s: %s%s", self.name, message, extra)
 
 
 @dataclass
@@ -101,7 +82,7 @@ class Bridge:
         self.services = services
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
-        self.warn = Throttled(spec.name).warn
+        self.warn = RateLimitedLog(log, WARN_PERIOD_S, prefix=spec.name).warn
         self.ctx = make_context(spec, services)
 
     def after_call(self, params: dict, result: Any) -> None:

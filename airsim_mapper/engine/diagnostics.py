@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.bridges import Bridge, SimToRos
-from airsim_mapper.ros_log import ros_logger
+from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.diagnostics")
 OK, WARN, ERROR = 0, 1, 2

@@ -14,10 +14,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from airsim_mapper.errors import ConfigError
+from airsim_mapper.logs import ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff
-from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.model import Mapping
-from airsim_mapper.ros_log import ros_logger
 
 log = ros_logger("airsim_mapper.mapping")
 POLL_PERIOD_S = 0.25

@@ -16,14 +16,15 @@ import xmlrpc.client
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from airsim_mapper.ros_log import ros_logger
+from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.master")
 POLL_PERIOD_S = 1.0
 MASTER_CALLER = "/master"
 
 
-class ReregisterError(RuntimeError):
+class ReregisterError(EngineError):
     """The master refused a registration."""
 
     def __init__(self, kind: str, name: str, message: str) -> None:

@@ -14,7 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from airsim_mapper.ros_log import ros_logger
+from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.streams")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 import logging
 
-from airsim_mapper.ros_log import ros_logger
+from airsim_mapper.logs import ros_logger
 
 
 def test_a_record_names_the_calling_file_function_and_line_where_rospy_set_the_logger_class(caplog):
@@ -21,4 +21,4 @@ def test_a_record_names_the_calling_file_function_and_line_where_rospy_set_the_l
     with caplog.at_level(logging.INFO, logger=logger.name):
         line = emitter()
     (record,) = caplog.records
-    assert (record.filename, record.funcName, record.lineno) == ("test_ros_log.py", "emitter", line)
+    assert (record.filename, record.funcName, record.lineno) == ("test_ros_logger.py", "emitter", line)
