@@ -26,7 +26,6 @@ from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
-IMAGE_CONVERTERS = ("image", "streaming_image")  # take params.max_pixels
 
 
 class _Checker:
@@ -143,7 +142,8 @@ class _Checker:
         self.position_box(base, raw.get("limits"), f"rule '{rule.name}'")
         if "max_pixels" in rule.params:
             value = rule.params["max_pixels"]
-            if rule.converter not in IMAGE_CONVERTERS:
+            info = catalog.find(rule.converter)
+            if info is None or not info.max_pixels:
                 self.add(
                     (*base, "params", "max_pixels"),
                     f"rule '{rule.name}': params.max_pixels applies only to the image converters",

@@ -10,7 +10,7 @@ import pytest
 from harness import Rig, RosMaster, wait_until
 
 from airsim_mapper.simserver.protocol import encode_frame
-from reliability.fakesim import FakeSim, message_frame
+from reliability.fake_server import FakeSimServer, message_frame
 from reliability.relkit import SimPorts, probe, stamps, start_node, statuses
 
 SIM = "/Sim/SceneDroneSensors/robots/Drone1"
@@ -47,9 +47,11 @@ def camera_frames() -> list[bytes]:
 
 
 @pytest.fixture
-def fake(launcher: Rig) -> tuple[FakeSim, SimPorts]:
+def fake(launcher: Rig) -> tuple[FakeSimServer, SimPorts]:
     ports = SimPorts.free()
-    sim = FakeSim("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: camera_frames()})
+    sim = FakeSimServer(
+        "127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: camera_frames()}
+    )
     yield sim, ports
     sim.close()
 
@@ -61,7 +63,7 @@ def rss_mb(pid: int) -> float:
 
 
 def test_oversized_and_empty_images_are_dropped_and_counted_and_memory_stays_small(
-    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSim, SimPorts]
+    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSimServer, SimPorts]
 ):
     _sim, ports = fake
     node = start_node(launcher, ports, "--scene", "scene_drone_sensors.jsonc", "--max-frame-mb", "1")
