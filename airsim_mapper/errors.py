@@ -13,7 +13,7 @@ scene is invalid, and `str()` is the full report, one `FILE:LINE:COL: message` a
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, field
 
 __all__ = ["AirsimMapperError", "ConfigError", "Problem"]
 
@@ -37,12 +37,17 @@ class Problem:
     line: int
     column: int
     message: str
+    key: str = field(default="", compare=False)  # the key path in the file (`rules[3].queue_size`)
 
     def __str__(self) -> str:
         message = _one_line(self.message)
         if self.line <= 0:
             return f"{self.file}: {message}"
         return f"{self.file}:{self.line}:{max(self.column, 1)}: {message}"
+
+    def as_dict(self) -> dict[str, str | int]:
+        """The problem as plain data (validate-mapping --format json)."""
+        return asdict(self)
 
 
 class ConfigError(AirsimMapperError):

@@ -16,6 +16,7 @@ MAPPINGS_DIR = PACKAGE_DIR / "mappings"
 SCHEMA_PATH = PACKAGE_DIR / "schemas" / "mapping.schema.json"
 DEFAULT_MAPPING = MAPPINGS_DIR / "default.yaml"
 MAPPING_SUFFIX = ".yaml"
+DEFAULT_SIM_CONFIG = "sim_config/"
 
 
 def shipped_mappings() -> list[str]:
@@ -38,8 +39,25 @@ def mapping_path(spec: str | Path) -> Path:
 
 
 def package_sim_config() -> Path | None:
-    """The scene configs that ship beside the package (a checkout's or catkin package's `sim_config/`)."""
+    """The sample scenes that ship with the package (inside a wheel's package, or a checkout's or catkin
+    package's `sim_config/`)."""
     for candidate in (PACKAGE_DIR / "sim_config", PACKAGE_DIR.parent / "sim_config"):
         if candidate.is_dir():
             return candidate
     return None
+
+
+def sim_config_dir(given: str | Path | None) -> Path:
+    """The scene directory a command uses: the one given; else `./sim_config/` where it exists; else the
+    package's sample scenes (so `--scene scene_basic_drone.jsonc` works from any directory)."""
+    if given is not None:
+        return Path(given)
+    here = Path(DEFAULT_SIM_CONFIG)
+    return here if here.is_dir() else (package_sim_config() or here)
+
+
+def ros_setup_file() -> Path:
+    """The setup file that lets ROS's own tools find the generated radar_msgs/uuid_msgs: the message space
+    inside an installed wheel, else the checkout's devel/ (built by `make setup`)."""
+    inside = PACKAGE_DIR / "ros" / "setup.bash"
+    return inside if inside.is_file() else PACKAGE_DIR.parent / "devel" / "setup.bash"

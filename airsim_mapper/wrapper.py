@@ -28,6 +28,7 @@ from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
 from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.logs import caller_logger, ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
@@ -37,7 +38,7 @@ from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 from airsim_mapper.tuning import keep_frame_buffers
 
-log = logging.getLogger("rosout.airsim_mapper")
+log = ros_logger("airsim_mapper")
 
 
 class WrapperError(AirsimMapperError, RuntimeError):
@@ -49,11 +50,11 @@ def redirect_client_log() -> None:
     as that logger's level lets them through."""
     from projectairsim.utils import projectairsim_log
 
-    client_log = projectairsim_log()
+    client_log = caller_logger(projectairsim_log())  # its records name their caller on /rosout too
     if any(getattr(f, "airsim_mapper", False) for f in client_log.filters):
         return
 
-    target = logging.getLogger("rosout.projectairsim")
+    target = ros_logger("projectairsim")
 
     def _redirect(record: logging.LogRecord) -> bool:
         if target.isEnabledFor(record.levelno):  # handle() alone would ignore the logger's level

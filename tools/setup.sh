@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Idempotent, complete setup: Debian's ROS1 packages, the venv, the project and its pinned dependencies,
-# and the generated radar_msgs/uuid_msgs Python. A second run with everything present changes nothing.
+# and the message space devel/ (radar_msgs/uuid_msgs for the venv and, sourced, for ROS's own tools). A second run with everything present changes nothing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -46,5 +46,6 @@ else
     say "Python dependencies: up to date"
 fi
 
-# 4. radar_msgs / uuid_msgs, generated from msg/ into the venv, md5sums verified.
+# 4. radar_msgs / uuid_msgs, generated from msg/ into devel/ (source devel/setup.bash for rostopic, rosbag,
+#    rosmsg), md5sums verified; a .pth file puts their Python on the venv's path.
 .venv/bin/python tools/gen_msgs.py

@@ -1,6 +1,7 @@
 """airsim-mapper: project commands. `airsim-mapper topics` prints a mapping's expanded interface on a
 scene as a Markdown table (ROS name, type, direction, simulator side, frame, rule bridge).
 `airsim-mapper converters` prints the converter catalogue as a Markdown table (the README's table).
+`airsim-mapper ros-setup` prints the setup file to source so that ROS's own tools read radar_msgs/uuid_msgs.
 
 Exit status: 0 done, 1 the mapping or scene is invalid (problems on stderr), 2 usage errors or unreadable
 files.
@@ -11,11 +12,13 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from typing import TextIO
 
 from airsim_mapper.convert import catalog
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
+from airsim_mapper.resources import ros_setup_file, sim_config_dir
 
 EXIT_OK, EXIT_INVALID, EXIT_USAGE = 0, 1, 2
 HEADERS = ("ROS name", "type", "direction", "simulator", "frame", "bridge")
@@ -31,10 +34,19 @@ def _parser() -> argparse.ArgumentParser:
         "--mapping", required=True, help="the mapping YAML file, or a shipped mapping's name (default, enu)"
     )
     topics.add_argument("--scene", required=True, help="a scene config file name inside --simconfigpath")
-    topics.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
+    topics.add_argument(
+        "--simconfigpath",
+        default=None,
+        help="the scene config directory (default: ./sim_config/, else the package's sample scenes)",
+    )
     topics.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     topics.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
     commands.add_parser("converters", help="print the converters a mapping may name, as a Markdown table")
+    commands.add_parser(
+        "ros-setup",
+        help="print the path of the setup file that lets ROS's own tools (rostopic, rosbag, rosmsg) read "
+        'radar_msgs and uuid_msgs: source "$(airsim-mapper ros-setup)"',
+    )
     return parser
 
 
@@ -109,15 +121,29 @@ def topics(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def ros_setup(out: TextIO) -> int:
+    """Print the message space's setup file, or say that `make setup` has not built it (status 2)."""
+    path = ros_setup_file()
+    if not path.is_file():
+        print(f"airsim-mapper: {path} does not exist: run `make setup` in the checkout", file=sys.stderr)
+        return EXIT_USAGE
+    print(path, file=out)
+    return EXIT_OK
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run airsim-mapper with `argv` (default: sys.argv[1:]); return the exit status."""
     try:
         args = _parser().parse_args(argv)
+        if hasattr(args, "simconfigpath"):
+            args.simconfigpath = sim_config_dir(args.simconfigpath)
     except SystemExit as stop:  # argparse has printed the usage or help message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
     if args.command == "converters":
         sys.stdout.write(catalog.markdown_table())
         return EXIT_OK
+    if args.command == "ros-setup":
+        return ros_setup(sys.stdout)
     return topics(args)
 
 

@@ -36,6 +36,7 @@ from airsim_mapper.cli.errors import SettingError
 from airsim_mapper.cli.settings import SETTINGS, given_settings, resolve_settings, values
 from airsim_mapper.cli.startup import StartUp, Stopper, connect
 from airsim_mapper.errors import ConfigError
+from airsim_mapper.logs import ros_logger
 from airsim_mapper.mapping.names import resolve_namespace
 
 if TYPE_CHECKING:
@@ -44,7 +45,7 @@ if TYPE_CHECKING:
 __all__ = ["SETTINGS", "SettingError", "connect", "given_settings", "main", "parse_args", "resolve_settings"]
 __all__ += ["run", "values"]
 
-log = logging.getLogger("rosout.airsim_mapper.node")
+log = ros_logger("airsim_mapper.node")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -53,7 +54,6 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     from airsim_mapper.resources import shipped_mappings
 
     parser = argparse.ArgumentParser(
-        prog="projectairsim_node.py",
         description=__doc__.splitlines()[0],
         epilog="Each switch but --nodename, --no-watch, --shutdown-timeout and --max-frame-mb is also a "
         "private parameter (~address, ~mapping, ...); the command line wins over the parameter, the "
@@ -151,7 +151,7 @@ def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
 
     def on_request(_request: Any) -> Any:
         outcome = reloader.reload("~reload_mapping")
-        return TriggerResponse(success=outcome.applied, message=outcome.message)
+        return TriggerResponse(success=outcome.ok, message=outcome.message)
 
     rospy.Service("~reload_mapping", Trigger, on_request)
     if watch:

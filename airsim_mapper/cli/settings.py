@@ -10,6 +10,7 @@ from typing import Any
 
 from airsim_mapper.cli.errors import SettingError
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+from airsim_mapper.resources import DEFAULT_SIM_CONFIG
 
 __all__ = ["SETTINGS", "Resolved", "Setting", "given_settings", "resolve_settings", "values"]
 
@@ -24,7 +25,6 @@ class Setting:
     kind: type = str
 
 
-DEFAULT_SIM_CONFIG = "sim_config/"
 SETTINGS = (
     Setting("address", "127.0.0.1", "host running Project AirSim"),
     Setting("topicsport", TOPICS_PORT, "Project AirSim pub-sub port", int),

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import logging
 import os
 import signal
 import threading
@@ -21,13 +20,14 @@ from typing import TYPE_CHECKING, Any
 
 from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
 from airsim_mapper.errors import ConfigError
+from airsim_mapper.logs import ros_logger
 
 if TYPE_CHECKING:
     from airsim_mapper.mapping.pipeline import Prepared
 
 __all__ = ["StartUp", "Stopper", "connect"]
 
-log = logging.getLogger("rosout.airsim_mapper.node")
+log = ros_logger("airsim_mapper.node")
 
 
 class Stopper:

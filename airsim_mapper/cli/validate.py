@@ -1,7 +1,8 @@
 """validate-mapping: check a mapping offline and, with --scene, show the bridges it makes.
 
-Exit status: 0 valid, 1 the mapping or scene is invalid (every problem on stderr as FILE:LINE:COL: message),
-2 usage errors or unreadable files.
+Exit status: 0 valid, 1 the mapping or scene is invalid (every problem on stderr as FILE:LINE:COL: message;
+with --format json, on stdout as {"problems": [{file, line, column, message, key}, ...]}), 2 usage errors
+or unreadable files.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from airsim_mapper.mapping.match import describe
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
-from airsim_mapper.resources import mapping_path
+from airsim_mapper.resources import mapping_path, sim_config_dir
 from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
@@ -39,10 +40,19 @@ def _parser() -> argparse.ArgumentParser:
         "running node's live reload would do)",
     )
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
-    parser.add_argument("--simconfigpath", default="sim_config/", help="the scene config directory")
+    parser.add_argument(
+        "--simconfigpath",
+        default=None,
+        help="the scene config directory (default: ./sim_config/, else the package's sample scenes)",
+    )
     parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
     parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
-    parser.add_argument("--format", choices=("text", "json"), default="text", help="output format")
+    parser.add_argument(
+        "--format",
+        choices=("text", "json"),
+        default="text",
+        help='output format; json also reports problems on stdout, as {"problems": [...]}',
+    )
     parser.add_argument(
         "--resolved",
         action="store_true",
@@ -94,6 +104,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
     try:
         args = _parser().parse_args(argv)
+        if hasattr(args, "simconfigpath"):
+            args.simconfigpath = sim_config_dir(args.simconfigpath)
     except SystemExit as stop:  # argparse has printed the usage message
         return EXIT_OK if stop.code == 0 else EXIT_USAGE
     try:
@@ -121,7 +133,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace
         )
     except ConfigError as err:
-        print(str(err), file=sys.stderr)
+        if args.format == "json":
+            print(json.dumps({"problems": [problem.as_dict() for problem in err.problems]}, indent=2))
+        else:
+            print(str(err), file=sys.stderr)
         return EXIT_USAGE if err.unreadable else EXIT_INVALID
     _print_bridges(bridges, args.format)
     summary, warnings = match_report(mapping, scene, args.nodename, args.namespace)

@@ -10,7 +10,6 @@ module, never the engine.
 from __future__ import annotations
 
 import dataclasses
-import logging
 import threading
 import time
 from collections.abc import Callable
@@ -30,10 +29,10 @@ from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_fro
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.geometry import q_conjugate, q_mul, q_rotate
-from airsim_mapper.logs import RateLimitedLog
+from airsim_mapper.logs import RateLimitedLog, ros_logger
 from airsim_mapper.mapping.model import BridgeSpec
 
-log = logging.getLogger("rosout.airsim_mapper.bridge")
+log = ros_logger("airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
 
 

@@ -3,15 +3,15 @@ connection, published once a second. Names are the bridges' names, the same ones
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.bridges import Bridge, SimToRos
+from airsim_mapper.logs import ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.diagnostics")
+log = ros_logger("airsim_mapper.diagnostics")
 OK, WARN, ERROR = 0, 1, 2
 STALE_AFTER_S = 3.0
 
@@ -55,10 +55,13 @@ def bridge_status(bridge: Bridge, seen: _Seen, now: float, drops: int, prefix: s
 
 
 def mapping_status(report: dict[str, Any], prefix: str) -> dict[str, Any]:
-    """The mapping's status: ERROR with the located errors while the last reload stands rejected."""
+    """The mapping's status: ERROR with the located errors while the last reload stands rejected, and with
+    the bridges it could not start while the last one stands applied with some of them refused."""
     rejected = report["state"] == "rejected"
     errors = report.get("errors") or []
-    message = f"edit rejected, bridges unchanged: {errors[0]}" if rejected and errors else report["state"]
+    message = report["state"]
+    if errors:
+        message = f"edit rejected, bridges unchanged: {errors[0]}" if rejected else f"applied; {errors[0]}"
     values = {
         "file": report["file"],
         "state": report["state"],
@@ -69,10 +72,15 @@ def mapping_status(report: dict[str, Any], prefix: str) -> dict[str, Any]:
     }
     return {
         "name": f"{prefix}mapping",
-        "level": ERROR if rejected else OK,
+        "level": ERROR if errors or rejected else OK,
         "message": message,
         "values": values,
     }
+
+
+def refused_status(name: str, why: str, prefix: str) -> dict[str, Any]:
+    """A bridge that could not start (ROS refused it): ERROR, with the reason."""
+    return {"name": f"{prefix}{name}", "level": ERROR, "message": f"could not start: {why}", "values": {}}
 
 
 class Diagnostics:
@@ -105,6 +113,8 @@ class Diagnostics:
             out.append(bridge_status(bridge, seen, now, drops, self.prefix))
             seen_now[name] = _Seen(bridge.stats.messages, bridge.stats.errors, now)
         self._seen = seen_now
+        refused = getattr(self.engine, "refused_bridges", dict)()
+        out += [refused_status(name, why, self.prefix) for name, why in refused.items()]
         return out
 
     def connection_status(self, now: float | None = None) -> dict[str, Any]:

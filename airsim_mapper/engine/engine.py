@@ -34,14 +34,14 @@ from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.supervisor import Supervisor
 from airsim_mapper.engine.validated_world import load_validated_world
 from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import RateLimitedLog, shorten
+from airsim_mapper.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.scene import Scene, read_scene
 
-log = logging.getLogger("rosout.airsim_mapper.engine")
-bridge_log = logging.getLogger("rosout.airsim_mapper.bridge")  # sim-time warnings, as the bridges' own
+log = ros_logger("airsim_mapper.engine")
+bridge_log = ros_logger("airsim_mapper.bridge")  # sim-time warnings, as the bridges' own
 MAX_QUEUED_SCENES = 8  # load_scene requests waiting for the scene-loader thread
 REFUSALS_LOGGED, REFUSALS_PERIOD_S = 10, 10.0  # at most this many refused loads logged per period
 SHOWN_LINE = 300  # characters of an error line a refusal log shows
@@ -93,6 +93,7 @@ class Engine:
             sim_time=self.sim_time,
         )
         self.bridges: dict[str, Bridge] = {}
+        self._refused: dict[str, str] = {}  # bridges that could not start (ROS refused them): name -> why
         self.scene: Scene | None = None
         self.world: Any = None
         self.load_world = load_world or load_validated_world
@@ -163,7 +164,10 @@ class Engine:
 
     def _start_bridges(self, specs: tuple[BridgeSpec, ...], names: set[str]) -> None:
         """Start the bridges of `specs` named in `names`, keeping `self.bridges` in the order of `specs`.
-        A bridge that cannot start is logged with its reason and left out; the others start."""
+        A bridge that cannot start (ROS refuses a name, say) is logged with its reason, left out and kept in
+        `refused_bridges()`; the others start."""
+        wanted = {s.name for s in specs}
+        self._refused = {n: why for n, why in self._refused.items() if n in wanted and n not in names}
         for spec in specs:
             if spec.name not in names:
                 continue
@@ -171,12 +175,16 @@ class Engine:
                 bridge = build(spec, self.services)
                 bridge.start()
             except Exception as exc:
-                log.error(
-                    "bridge %s could not start and stays off: %s: %s", spec.name, type(exc).__name__, exc
-                )
+                self._refused[spec.name] = f"{type(exc).__name__}: {exc}"
+                log.error("bridge %s could not start and stays off: %s", spec.name, self._refused[spec.name])
                 continue
             self.bridges[spec.name] = bridge
         self.bridges = {s.name: self.bridges[s.name] for s in specs if s.name in self.bridges}
+
+    def refused_bridges(self) -> dict[str, str]:
+        """The bridges of the running mapping that could not start, with why (for /diagnostics, reloads)."""
+        with self.lock:
+            return dict(self._refused)
 
     def _stop_scene_bridges(self, keep: dict[str, BridgeSpec]) -> None:
         """Stop every bridge except scene-independent ones whose spec is unchanged."""

@@ -7,7 +7,6 @@ bridge stays as it was. If it is valid, the engine applies the difference only (
 
 from __future__ import annotations
 
-import logging
 import os
 import threading
 import time
@@ -16,10 +15,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.errors import ConfigError
+from airsim_mapper.logs import ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.model import Mapping
 
-log = logging.getLogger("rosout.airsim_mapper.mapping")
+log = ros_logger("airsim_mapper.mapping")
 POLL_PERIOD_S = 0.25
 SETTLE_S = 0.05  # a file must stay the same this long before it is read (editors write in steps)
 Stamp = tuple[int, int, int] | None
@@ -44,8 +44,13 @@ class Outcome:
 
     applied: bool
     message: str
-    errors: tuple[str, ...] = ()
+    errors: tuple[str, ...] = ()  # rejected: the located errors; applied: the bridges that could not start
     diff: BridgeDiff | None = None
+
+    @property
+    def ok(self) -> bool:
+        """Applied, with every bridge it added or changed running (the ~reload_mapping answer's success)."""
+        return self.applied and not self.errors
 
 
 @dataclass
@@ -108,12 +113,18 @@ class MappingReloader:
                 return self._rejected([f"{self.spec}: {exc.strerror or exc}"], why)
             self.files = tuple(mapping.files or (mapping.source,))
             self.seen = stamps(self.files)
+            touched = {*diff.added, *diff.changed}
+            refused = getattr(self.engine, "refused_bridges", dict)()
+            errors = [
+                f"bridge {name} could not start: {why}" for name, why in refused.items() if name in touched
+            ]
             report = self.report
-            report.state, report.errors, report.last_change = "applied", [], diff.summary()
+            report.state, report.errors, report.last_change = "applied", errors, diff.summary()
             report.reloads += 1
             self._publish()
         log.info("mapping %s reloaded (%s): %s", mapping.source, why, diff.summary())
-        return Outcome(True, f"applied: {diff.summary()}", diff=diff)
+        message = f"applied: {diff.summary()}" + "".join(f"\n{line}" for line in errors)
+        return Outcome(True, message, tuple(errors), diff=diff)
 
     def _rejected(self, errors: list[str], why: str) -> Outcome:
         report = self.report

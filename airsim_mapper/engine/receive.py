@@ -7,16 +7,16 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import logging
 import threading
 import time
 from typing import Any
 
 from airsim_mapper.engine.fast_frames import Buffer, decode_map
+from airsim_mapper.logs import ros_logger
 
 __all__ = ["close_client", "decode_body", "receive", "receive_frame", "take_over", "unknown_topic"]
 
-log = logging.getLogger("rosout.airsim_mapper.sim")
+log = ros_logger("airsim_mapper.sim")
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
 RECEIVE_THREAD = "sim-receive"
 CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through

@@ -11,15 +11,15 @@ publishers (through the node's own `publisherUpdate`, exactly as the master woul
 
 from __future__ import annotations
 
-import logging
 import threading
 import xmlrpc.client
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.logs import ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.master")
+log = ros_logger("airsim_mapper.master")
 POLL_PERIOD_S = 1.0
 MASTER_CALLER = "/master"
 

@@ -5,7 +5,6 @@ runners.py picks one for a spec."""
 
 from __future__ import annotations
 
-import logging
 import time
 from typing import Any
 
@@ -16,11 +15,16 @@ from airsim_mapper.engine.bridges import Bridge, Services, _accepted
 from airsim_mapper.engine.replays import LatchedReplays, connection_header
 from airsim_mapper.engine.ros_link import FrameUnknown
 from airsim_mapper.engine.sim_link import SimLinkError
+from airsim_mapper.logs import ros_logger
 from airsim_mapper.mapping.model import BridgeSpec
 
 __all__ = ["RosService", "RosToSim"]
 
-log = logging.getLogger("rosout.airsim_mapper.bridge")
+log = ros_logger("airsim_mapper.bridge")
+# A service call waits for the simulator's reply this long past the call's own `timeout_sec` (by then the
+# simulator has answered, success or not); a call without one waits SIM_REPLY_S.
+REPLY_MARGIN_S = 5.0
+SIM_REPLY_S = 30.0
 
 
 class RosToSim(Bridge):
@@ -150,7 +154,7 @@ class RosService(Bridge):
             require_finite(params)
             if self.info.runner == catalog.SERVE_ALL:
                 return self._on_all_robots(response, params)
-            result = self.services.sim.call(self.spec.sim, params)
+            result = self.services.sim.call(self.spec.sim, params, timeout=reply_timeout(params, SIM_REPLY_S))
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
             return _fill(response, False, str(exc))
@@ -167,10 +171,11 @@ class RosService(Bridge):
         robots = list(self.spec.source.get("robots", []))
         sim = self.services.sim
         calls = {robot: sim.call_async(f"{self.spec.sim}/{robot}/{method}", params) for robot in robots}
+        wait = reply_timeout(params, float(self.spec.params.get("timeout_s", 60.0)))
         failed = []
         for robot, future in calls.items():
             try:
-                if future.result(timeout=float(self.spec.params.get("timeout_s", 60.0))) in (False, None):
+                if future.result(timeout=wait) in (False, None):
                     failed.append(f"{robot}: false")
             except Exception as exc:
                 failed.append(f"{robot}: {exc}")
@@ -199,3 +204,14 @@ def _fill(response: Any, success: bool, message: str) -> Any:
     if hasattr(response, "message"):
         response.message = message
     return response
+
+
+def reply_timeout(params: dict, default: float) -> float:
+    """How long a service call waits for the simulator: the call's own `timeout_sec` (the simulator gives
+    up then and replies false) plus REPLY_MARGIN_S, so a land or move is never cut short on the bridge's
+    side while the robot still moves; `default` for a call without one."""
+    try:
+        limit = float(params.get("timeout_sec"))
+    except (TypeError, ValueError):
+        return default
+    return limit + REPLY_MARGIN_S if 0 < limit < float("inf") else default

@@ -26,7 +26,6 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
-import logging
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -44,9 +43,9 @@ from airsim_mapper.engine.receive import (
     take_over,
     unknown_topic,
 )
-from airsim_mapper.logs import RateLimitedLog
+from airsim_mapper.logs import RateLimitedLog, ros_logger
 
-log = logging.getLogger("rosout.airsim_mapper.sim")
+log = ros_logger("airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
 WARN_PERIOD_S = 5.0

@@ -18,13 +18,11 @@ import json
 import threading
 from typing import Any
 
+from airsim_mapper.mapping.reserved import status_topic
+
 CONNECTED = "connected"
 STALE = "stale"
 STOPPED = "stopped"
-
-
-def status_topic(node_name: str) -> str:
-    return f"/airsim_mapper/{node_name.strip('/')}/status"
 
 
 class StatusPublisher:

@@ -8,14 +8,15 @@ delays pose, tf or commands, and never builds a backlog.
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-log = logging.getLogger("rosout.airsim_mapper.streams")
+from airsim_mapper.logs import ros_logger
+
+log = ros_logger("airsim_mapper.streams")
 
 # A handler converts and publishes one message; it may return transforms to broadcast. The transforms of
 # all handlers of one message go out together, as one tf message.

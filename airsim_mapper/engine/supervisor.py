@@ -18,7 +18,6 @@ the bridges use.
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from collections.abc import Callable
@@ -29,11 +28,12 @@ from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, Healt
 from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
+from airsim_mapper.logs import ros_logger
 
 if TYPE_CHECKING:
     from airsim_mapper.engine.engine import Engine
 
-log = logging.getLogger("rosout.airsim_mapper.engine")
+log = ros_logger("airsim_mapper.engine")
 WATCHDOG_PERIOD_S = 0.05
 STATUS_PERIOD_S = 1.0
 RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)

@@ -2,9 +2,22 @@
 
 Its face (`__all__`, the modules the layers above import): `loader`, `expand`, `pipeline` (both in one
 call), `model` (Mapping, BridgeSpec), `errors`, `diff`, `report`, `match`, `names` and `extends` (what the
-command line shows of a mapping). Everything else is the mapping layer's own.
+command line shows of a mapping), `reserved` (the names the node owns, its status topic's among them).
+Everything else is the mapping layer's own.
 """
 
 from __future__ import annotations
 
-__all__ = ["diff", "errors", "expand", "extends", "loader", "match", "model", "names", "pipeline", "report"]
+__all__ = [
+    "diff",
+    "errors",
+    "expand",
+    "extends",
+    "loader",
+    "match",
+    "model",
+    "names",
+    "pipeline",
+    "report",
+    "reserved",
+]

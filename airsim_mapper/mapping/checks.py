@@ -20,7 +20,7 @@ from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.match import match_problems
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
 from airsim_mapper.mapping.names import ros_name_problem
-from airsim_mapper.mapping.origins import file_of
+from airsim_mapper.mapping.origins import located
 from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
@@ -36,8 +36,7 @@ class _Checker:
         self.problems: list[Problem] = []
 
     def add(self, path: tuple[Any, ...], message: str, at_key: bool = False) -> None:
-        line, col = self.marks.key(path) if at_key else self.marks.value(path)
-        self.problems.append(Problem(file_of(self.marks, path, self.file, at_key), line, col, message))
+        self.problems.append(located(self.marks, path, self.file, message, at_key))
 
     def rule(self, rule: Rule, index: int) -> Rule:
         base = ("rules", index)

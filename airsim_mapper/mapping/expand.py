@@ -32,6 +32,7 @@ from airsim_mapper.mapping.match import matches
 from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
 from airsim_mapper.mapping.model import Mapping as MappingDoc
 from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem
 from airsim_mapper.scene import Scene
 
 Element = tuple[str, dict[str, str], dict[str, Any]]  # (name key, variables, source)
@@ -167,6 +168,8 @@ def expand(
     problems: list[Problem] = []
     owners: dict[str, BridgeSpec] = {}
     lines = {rule.name: rule.line for rule in mapping.rules}
+    on = clock_rule_on(rule.converter for rule in mapping.rules if rule.options.enabled)
+    owned = node_names(node_name, namespace_variables(namespace)["namespace"], clock_rule=on)
     for rule in mapping.rules:
         if not rule.options.enabled:
             continue
@@ -180,9 +183,14 @@ def expand(
             bridge = _bridge(rule, key, variables, source)
             if bridge.ros is not None:
                 why = ros_name_problem(bridge.ros)
+                taken = taken_problem(bridge.ros, bridge.converter, owned)
                 if why:
                     message = f"bridge {bridge.name}: ROS name '{bridge.ros}' is not valid: {why}"
                     problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
+                elif taken:
+                    problems.append(
+                        Problem(rule.file or mapping.source, rule.line, 1, f"bridge {bridge.name}: {taken}")
+                    )
                 elif bridge.ros in owners:
                     other = owners[bridge.ros]
                     message = (

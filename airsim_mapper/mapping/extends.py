@@ -25,7 +25,7 @@ from typing import Any
 from airsim_mapper.files import MAX_CONFIG_BYTES, ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.errors import MappingError, Problem
-from airsim_mapper.mapping.origins import KeyPath, Origins, Table
+from airsim_mapper.mapping.origins import KeyPath, Origins, Table, located
 from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
 from airsim_mapper.resources import MAPPING_SUFFIX, MAPPINGS_DIR, shipped_mappings
@@ -36,8 +36,7 @@ MAX_CHAIN = 16  # bases deep
 
 
 def _located(origins: Origins, path: KeyPath, message: str, at_key: bool = False) -> Problem:
-    line, column = origins.key(path) if at_key else origins.value(path)
-    return Problem(origins.file_of(path, at_key), line, column, message)
+    return located(origins, path, origins.file, message, at_key)
 
 
 def _merge(base: Any, over: Any) -> Any:

@@ -18,7 +18,8 @@ from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.extends import resolve
 from airsim_mapper.mapping.match import selections_of
 from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
-from airsim_mapper.mapping.origins import Origins, file_of
+from airsim_mapper.mapping.origins import Origins, file_of, located
+from airsim_mapper.mapping.reserved import literal_problem
 from airsim_mapper.mapping.schema import schema_problems
 from airsim_mapper.mapping.variables import apply_variables
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
@@ -53,10 +54,10 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
         kind = "a list" if isinstance(data, list) else f"the scalar {data!r}"
         raise MappingError.single(file, f"the top level must be a mapping of keys (found {kind})", 1, 1)
     data, marks = resolve(data, Origins.of(marks, file), limits=limits)  # extends: one merged document
-    located = schema_problems(data, marks, file)
-    problems = [problem for _, problem in located]
-    bad_rules = {path[1] for path, _ in located if len(path) > 1 and path[0] == "rules"}
-    if any(len(path) < 2 or path[0] != "rules" for path, _ in located):
+    schema_found = schema_problems(data, marks, file)
+    problems = [problem for _, problem in schema_found]
+    bad_rules = {path[1] for path, _ in schema_found if len(path) > 1 and path[0] == "rules"}
+    if any(len(path) < 2 or path[0] != "rules" for path, _ in schema_found):
         raise MappingError(sorted(problems))  # the document's frame is broken: rules cannot be built
     data, unusable = apply_variables(data, marks, file)
     problems += unusable
@@ -77,6 +78,10 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     indexes = [index for index in range(len(data["rules"])) if index not in bad_rules]
     semantic, rules = check_rules(rules, indexes, data, marks, file)
     problems += semantic
+    for rule, index in zip(rules, indexes):
+        why = literal_problem(rule.ros) if rule.options.enabled else ""
+        if why:
+            problems.append(located(marks, ("rules", index, "ros"), file, f"rule '{rule.name}': {why}"))
     if problems:
         raise MappingError(sorted(set(problems)))
     image_types = data.get("image_types")

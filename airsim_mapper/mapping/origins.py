@@ -7,6 +7,7 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any
 
+from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.yamlmarks import Marks
 
 KeyPath = tuple[Any, ...]
@@ -20,6 +21,8 @@ class Origins(Marks):
     key_files: dict[KeyPath, str] = field(default_factory=dict)
     file: str = "<string>"  # the file the user named (for paths nobody wrote, e.g. the top level)
     chain: tuple[str, ...] = ()  # with extends: this file and each of its bases, in order
+    # (merged rule index, file) -> the rule's index in that file, where the two differ
+    rule_indices: dict[tuple[int, str], int] = field(default_factory=dict)
 
     @classmethod
     def of(cls, marks: Marks, file: str) -> Origins:
@@ -53,10 +56,41 @@ class Origins(Marks):
                 return self.value_files.get(path[:cut], self.file)
         return self.file
 
+    def local_index(self, index: int, file: str) -> int:
+        """The index in `file` of the merged rule `index`."""
+        return self.rule_indices.get((index, file), index)
+
+    def local(self, path: KeyPath, at_key: bool = False) -> KeyPath:
+        """`path` as the file it was written in numbers it: a merged rule's index becomes its index there."""
+        if len(path) >= 2 and path[0] == "rules" and isinstance(path[1], int):
+            return ("rules", self.local_index(path[1], self.file_of(path, at_key)), *path[2:])
+        return path
+
 
 def file_of(marks: Marks, path: KeyPath, file: str, at_key: bool = False) -> str:
     """The file a problem at `path` belongs to: from Origins when the document was merged, else `file`."""
     return marks.file_of(path, at_key) if isinstance(marks, Origins) else file
+
+
+def local_path(marks: Marks, path: KeyPath, at_key: bool = False) -> KeyPath:
+    """`path` as numbered in the file it was written in (see Origins.local)."""
+    return marks.local(path, at_key) if isinstance(marks, Origins) else path
+
+
+def key_text(path: KeyPath) -> str:
+    """A key path as text: `rules[3].params.args`."""
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def located(marks: Marks, path: KeyPath, file: str, message: str, at_key: bool = False) -> Problem:
+    """A problem at `path`: its file, line and column (of the key with `at_key`, else of the value), and
+    its key path as the file numbers it."""
+    line, column = marks.key(path) if at_key else marks.value(path)
+    where = file_of(marks, path, file, at_key)
+    return Problem(where, line, column, message, key_text(local_path(marks, path, at_key)))
 
 
 class Table:
@@ -68,6 +102,7 @@ class Table:
         self.keys: dict[KeyPath, tuple[int, int]] = {}
         self.value_files: dict[KeyPath, str] = {}
         self.key_files: dict[KeyPath, str] = {}
+        self.rule_indices: dict[tuple[int, str], int] = {}
 
     def copy(self, source: Origins, old: KeyPath, new: KeyPath) -> None:
         """Copy every mark at or below `old` in `source` to the same place below `new`."""
@@ -84,6 +119,9 @@ class Table:
                     moved = (*new, *path[size:])
                     target[moved] = table[path]
                     target_files[moved] = files.get(path, source.file)
+                    if size == 2 and old[0] == new[0] == "rules":
+                        written = target_files[moved]
+                        self.rule_indices[(new[1], written)] = source.local_index(old[1], written)
 
     def copy_one(self, source: Origins, path: KeyPath) -> None:
         """Copy the marks of `path` itself (not those below it)."""
@@ -95,4 +133,6 @@ class Table:
             self.key_files[path] = source.key_files.get(path, source.file)
 
     def origins(self, chain: tuple[str, ...] = ()) -> Origins:
-        return Origins(self.values, self.keys, self.value_files, self.key_files, self.file, chain)
+        return Origins(
+            self.values, self.keys, self.value_files, self.key_files, self.file, chain, self.rule_indices
+        )

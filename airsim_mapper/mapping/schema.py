@@ -11,7 +11,7 @@ from typing import Any
 import jsonschema
 
 from airsim_mapper.mapping.errors import Problem
-from airsim_mapper.mapping.origins import file_of
+from airsim_mapper.mapping.origins import local_path, located
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.resources import SCHEMA_PATH
 
@@ -34,13 +34,14 @@ def did_you_mean(word: str, choices: Any) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
-def where(path: tuple[Any, ...], data: Any) -> str:
-    """A readable location: `rules[2] 'camera_image'.queue_size`."""
+def where(path: tuple[Any, ...], data: Any, shown: tuple[Any, ...] | None = None) -> str:
+    """A readable location: `rules[2] 'camera_image'.queue_size`, numbered as `shown` (the same path as the
+    file it was written in numbers it) when given."""
     text = ""
     node = data
-    for part in path:
+    for part, label in zip(path, shown or path):
         if isinstance(part, int):
-            text += f"[{part}]"
+            text += f"[{label}]"
             node = node[part] if isinstance(node, list) and part < len(node) else None
             if len(text) and isinstance(node, dict) and isinstance(node.get("name"), str):
                 text += f" '{node['name']}'"
@@ -57,7 +58,7 @@ def _brief(value: Any) -> str:
 
 def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Iterator[tuple[tuple, str]]:
     path = tuple(err.absolute_path)
-    loc = where(path, data)
+    loc = where(path, data, local_path(marks, path))
     if err.validator == "additionalProperties" and isinstance(err.instance, dict):
         known = err.schema.get("properties", {})
         for key in err.instance:
@@ -94,6 +95,5 @@ def schema_problems(data: Any, marks: Marks, file: str) -> list[tuple[tuple[Any,
             continue  # checks.py reports it, with a did-you-mean, and checks the rest of the rule
         for path, message in _messages(err, data, marks):
             at_key = err.validator == "additionalProperties"
-            line, col = marks.key(path) if at_key else marks.value(path)
-            problems.append((path, Problem(file_of(marks, path, file, at_key), line, col, message)))
+            problems.append((path, located(marks, path, file, message, at_key)))
     return problems

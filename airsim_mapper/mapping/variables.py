@@ -15,7 +15,7 @@ from typing import Any
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES
-from airsim_mapper.mapping.origins import file_of
+from airsim_mapper.mapping.origins import located
 from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 
@@ -24,8 +24,7 @@ RULE_TEMPLATE_KEYS = ("sim", "ros", "frame_id", "tf", "params")
 
 
 def _problem(marks: Marks, file: str, path: tuple[Any, ...], message: str, at_key: bool = False) -> Problem:
-    line, column = marks.key(path) if at_key else marks.value(path)
-    return Problem(file_of(marks, path, file, at_key), line, column, message)
+    return located(marks, path, file, message, at_key)
 
 
 def resolve_variables(

@@ -115,6 +115,19 @@ def test_land_brings_the_drone_to_the_ground_and_takeoff_lifts_it(rig: Stack, po
     assert pose.position == pytest.approx(held, abs=0.05)
 
 
+def test_land_from_take_off_height_waits_for_the_whole_descent(rig: Stack, pose: PoseWatch):
+    assert call(f"{ROBOT}/reset").success  # back at the scene's origin, 4 m up
+    wait_until(lambda: np.allclose(pose.position, [0.0, 0.0, -4.0], atol=0.05), 10, what="the origin")
+    time.sleep(0.5)
+    assert call(f"{ROBOT}/takeoff").success
+    wait_until(lambda: pose.position[2] < -6.9, 10, what="take-off height (7 m up)")
+    started = time.monotonic()
+    reply = call(f"{ROBOT}/land")  # 7 m at 0.2 m/s: longer than the bridge's plain 30 s wait
+    assert (reply.success, reply.message) == (True, "")
+    assert time.monotonic() - started > 30
+    wait_until(lambda: abs(pose.position[2]) < 0.2, 10, what="a landed pose (NED z near 0)")
+
+
 def test_flying_into_a_block_reports_the_collision_and_reset_returns_to_the_origin(
     rig: Stack, pose: PoseWatch
 ):

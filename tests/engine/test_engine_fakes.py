@@ -8,6 +8,7 @@ from fakes import IMU_MESSAGE, EngineRig
 from harness import SIM_CONFIG, wait_until
 
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED
+from airsim_mapper.mapping.loader import load_mapping
 
 SCENE = "scene_drone_sensors.jsonc"
 IMU_ROS = "/airsim_node/Drone1/IMU1/imu"
@@ -135,3 +136,56 @@ def test_a_bridge_that_cannot_start_stays_off_and_every_other_one_runs(rig: Engi
     rig.ros.refused = set()
     rig.engine.apply_mapping(edited)  # applying again starts what is missing
     assert "actual_pose[Drone1]" in rig.engine.bridges
+
+
+EXTRA = """\
+version: 1
+extends: default
+rules:
+  - name: extra_pose
+    for_each: robot
+    direction: sim_to_ros
+    converter: pose
+    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose
+    ros: {ros}
+    type: geometry_msgs/PoseStamped
+"""
+
+
+def test_a_bridge_ros_refuses_at_run_time_is_an_error_in_the_reload_answer_and_on_diagnostics(rig, tmp_path):
+    from airsim_mapper.engine.diagnostics import ERROR, mapping_status, refused_status
+    from airsim_mapper.engine.mapping_reload import MappingReloader
+
+    rig.engine.load_scene(SCENE)
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(EXTRA.format(ros="/elsewhere/pose"))
+    reloader = MappingReloader(rig.engine, str(mine), load_mapping("default"))
+    rig.ros.refused.add("/elsewhere/pose")  # rospy refuses it, as it does a name taken with another type
+    outcome = reloader.reload()
+    why = "ValueError: /elsewhere/pose is already advertised with another type"
+    assert outcome.applied and not outcome.ok
+    assert outcome.errors == (f"bridge extra_pose[Drone1] could not start: {why}",)
+    assert outcome.message == f"applied: 1 added, 0 removed, 0 changed, 73 unchanged\n{outcome.errors[0]}"
+    assert rig.engine.refused_bridges() == {"extra_pose[Drone1]": why}
+    status = mapping_status(rig.engine.mapping_report, "node: ")
+    assert (status["level"], status["message"]) == (ERROR, f"applied; {outcome.errors[0]}")
+    assert refused_status("extra_pose[Drone1]", why, "node: ")["level"] == ERROR
+    rig.ros.refused.clear()  # the next reload tries it again, and it starts
+    mine.write_text(EXTRA.format(ros="/elsewhere/pose") + "# touched\n")
+    again = reloader.reload()
+    assert again.ok and rig.engine.refused_bridges() == {} and "extra_pose[Drone1]" in rig.engine.bridges
+
+
+def test_a_reload_taking_a_name_the_node_owns_is_refused_whole(rig, tmp_path):
+    from airsim_mapper.engine.mapping_reload import MappingReloader
+
+    rig.engine.load_scene(SCENE)
+    before = dict(rig.engine.bridges)
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(EXTRA.format(ros="<namespace>/<node_name>/reload_mapping"))
+    outcome = MappingReloader(rig.engine, str(mine), load_mapping("default")).reload()
+    assert not outcome.applied and rig.engine.bridges == before
+    assert outcome.errors == (
+        f"{mine}:4:1: bridge extra_pose[Drone1]: ROS name '/node/reload_mapping' belongs to the node's "
+        "private service ~reload_mapping; a rule cannot take it",
+    )

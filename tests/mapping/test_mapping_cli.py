@@ -132,3 +132,66 @@ def test_a_directory_given_as_mapping_exits_1_naming_it(tmp_path, capsys):
     assert (
         capsys.readouterr().err.strip() == f"{tmp_path}: the mapping file is a directory, not a regular file"
     )
+
+
+EXTENDING = """\
+version: 1
+extends: default
+rules:
+  - name: imu
+    queue_size: -3
+  - name: extra
+    for_each: robot
+    direction: sim_to_ros
+    converter: pose
+    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose
+    ros: /extra/<robot_name>
+    type: geometry_msgs/PoseStamped
+    colour: red
+"""
+
+
+def test_json_format_reports_each_problem_on_stdout_with_its_place_and_key(tmp_path, capsys):
+    mapping = tmp_path / "mine.yaml"
+    mapping.write_text(EXTENDING)
+    assert main([str(mapping), "--format", "json"]) == 1
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    problems = json.loads(captured.out)["problems"]
+    assert problems == [
+        {
+            "file": str(mapping),
+            "line": 5,
+            "column": 17,
+            "key": "rules[0].queue_size",
+            "message": "rules[0] 'imu'.queue_size: -3 is less than the minimum of 1",
+        },
+        {
+            "file": str(mapping),
+            "line": 13,
+            "column": 5,
+            "key": "rules[1].colour",
+            "message": "unknown key 'colour' in rules[1] 'extra'",
+        },
+    ]
+    # the same problems, the same exit status, as text on stderr
+    assert main([str(mapping)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"{mapping}:5:17: {problems[0]['message']}", f"{mapping}:13:5: {problems[1]['message']}"]
+
+
+def test_json_format_reports_an_unreadable_mapping_on_stdout_with_exit_status_2(tmp_path, capsys):
+    assert main([str(tmp_path / "absent.yaml"), "--format", "json"]) == 2
+    (problem,) = json.loads(capsys.readouterr().out)["problems"]
+    assert problem["file"] == str(tmp_path / "absent.yaml") and "cannot read" in problem["message"]
+
+
+def test_a_base_rules_problem_is_labelled_with_its_index_in_the_base(tmp_path, capsys):
+    (tmp_path / "base.yaml").write_text(EXTENDING.replace("  - name: imu\n    queue_size: -3\n", ""))
+    (tmp_path / "child.yaml").write_text(
+        "version: 1\nextends: base.yaml\nrules:\n  - name: imu\n    queue_size: 2\n"
+    )
+    assert main([str(tmp_path / "child.yaml"), "--format", "json"]) == 1
+    (problem,) = json.loads(capsys.readouterr().out)["problems"]
+    assert problem["file"] == str(tmp_path / "base.yaml")
+    assert problem["key"] == "rules[0].colour" and "in rules[0] 'extra'" in problem["message"]

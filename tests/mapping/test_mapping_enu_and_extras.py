@@ -196,7 +196,7 @@ def test_default_mapping_maps_each_control_service_to_its_simulator_method(defau
             "std_srvs/Trigger",
             f"{sim}/Land",
             "trigger",
-            {"args": {"timeout_sec": 25}},
+            {"args": {"timeout_sec": 60}},
         ),
         f"{robot}/hover": ("service", "std_srvs/Trigger", f"{sim}/Hover", "trigger", {}),
         f"{robot}/arm": ("service", "std_srvs/Trigger", f"{sim}/Arm", "trigger", {}),

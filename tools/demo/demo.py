@@ -1,12 +1,14 @@
 """`make demo`: roscore + headless server + bridge + hello mission, a live rate table, a picture and a bag.
 
 Everything runs as real processes on free ports; the demo itself is a ROS node that watches every
-topic the bridge publishes. At the end it writes out/demo.png and out/demo.bag and stops what it started.
+topic the bridge publishes. At the end it writes out/demo.png and out/demo.bag and stops what it started;
+Ctrl-C, SIGTERM and SIGHUP (`kill` of `make demo`'s process group, a closed terminal) stop it all too.
 """
 
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import threading
 import time
@@ -174,9 +176,28 @@ class Demo:
         draw(OUT / "demo.png", self.latest, np.array(self.track or [(0.0, 0.0, 0.0)]), ROBOT, CAMERA)
 
 
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
+
+
+class Stopped(Exception):
+    """SIGTERM or SIGHUP: the demo ends as Ctrl-C ends it, stopping everything it started."""
+
+    def __init__(self, number: int) -> None:
+        super().__init__(signal.Signals(number).name)
+        self.number = number
+
+
+def _stop(number: int, _frame: object) -> None:
+    for sig in STOP_SIGNALS:  # a second signal must not cut the clean-up short
+        signal.signal(sig, signal.SIG_IGN)
+    raise Stopped(number)
+
+
 def main() -> int:
     seconds = float(os.environ.get("DEMO_SECONDS", "30"))
     OUT.mkdir(exist_ok=True)
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, _stop)
     demo = Demo(seconds)
     try:
         return demo.run()
@@ -185,5 +206,8 @@ def main() -> int:
         return 1
     except KeyboardInterrupt:
         return 130
+    except Stopped as stop:
+        print(f"demo: {stop}: stopping everything it started", file=sys.stderr)
+        return 128 + stop.number
     finally:
         demo.rig.stop_all()

@@ -1,0 +1,91 @@
+"""The names the node owns (/diagnostics, /rosout, /tf, /tf_static, /clock while the clock rule is on, its
+private services and status topic) are refused as located errors, as is one name for two rules."""
+
+from __future__ import annotations
+
+import pytest
+from harness import SIM_CONFIG
+
+from airsim_mapper.cli.validate import main
+from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.expand import expand
+from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
+from airsim_mapper.mapping.reserved import GLOBAL
+from airsim_mapper.scene import read_scene
+
+EXTENDING = "version: 1\nextends: default\n"
+
+
+def pose_rule(name: str, ros: str, ros_type: str = "geometry_msgs/PoseStamped") -> str:
+    return (
+        f"  - name: {name}\n    for_each: robot\n    direction: sim_to_ros\n    converter: pose\n"
+        f"    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose\n    ros: {ros}\n    type: {ros_type}\n"
+    )
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return read_scene(SIM_CONFIG, "scene_basic_drone.jsonc")
+
+
+@pytest.mark.parametrize("name", sorted(GLOBAL))
+def test_a_rule_on_a_name_the_node_owns_is_a_located_error_at_its_ros_key(tmp_path, capsys, name):
+    mapping = tmp_path / "mine.yaml"
+    mapping.write_text(EXTENDING + "rules:\n" + pose_rule("mine", name))
+    assert main([str(mapping)]) == 1
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"{mapping}:9:10: rule 'mine': ROS name '{name}' belongs to ")
+    assert line.endswith("a rule cannot take it")
+
+
+@pytest.mark.parametrize("service", ["reload_mapping", "get_loggers", "set_logger_level"])
+@pytest.mark.parametrize("namespace", ["", "/sim2"])
+def test_a_rule_on_the_nodes_private_services_is_refused_at_expansion(scene, service, namespace):
+    text = "version: 1\nrules:\n" + pose_rule("mine", f"<namespace>/<node_name>/{service}")
+    mapping = load_mapping_text(text, "mine.yaml")
+    with pytest.raises(MappingError) as raised:
+        expand(mapping, scene, "bridge", namespace)
+    (problem,) = raised.value.problems
+    assert (problem.file, problem.line) == ("mine.yaml", 3)
+    assert (
+        f"'{namespace}/bridge/{service}' belongs to the node's private service ~{service}" in problem.message
+    )
+
+
+def test_the_status_topic_is_the_nodes_own(scene):
+    mapping = load_mapping_text(
+        "version: 1\nrules:\n" + pose_rule("mine", "/airsim_mapper/<node_name>/status")
+    )
+    with pytest.raises(MappingError, match="belongs to the node's status topic"):
+        expand(mapping, scene, "bridge")
+
+
+def test_clock_is_the_clock_rules_while_it_is_on_and_free_without_it(scene):
+    taken = load_mapping_text(EXTENDING + "rules:\n" + pose_rule("mine", "/clock"), "mine.yaml")
+    with pytest.raises(MappingError, match=r"'/clock' belongs to the clock rule's /clock"):
+        expand(taken, scene, "projectairsim", "/sim2")  # the clock rule publishes /sim2/clock
+    free = load_mapping_text(
+        EXTENDING + "remove: [clock]\nrules:\n" + pose_rule("mine", "/clock"), "mine.yaml"
+    )
+    assert any(b.ros == "/clock" for b in expand(free, scene, "projectairsim", "/sim2"))
+
+
+def test_two_rules_with_one_name_and_different_types_are_a_located_error(tmp_path, capsys):
+    mapping = tmp_path / "mine.yaml"
+    twist = pose_rule("mine", "<namespace>/airsim_node/<robot_name>/actual_pose", "geometry_msgs/Twist")
+    twist = twist.replace("converter: pose", "converter: cmd_vel").replace("sim_to_ros", "ros_to_sim")
+    mapping.write_text(
+        EXTENDING + "rules:\n" + twist.replace("actual_pose\n", "MoveByVelocityBodyFrame\n", 1)
+    )
+    assert main([str(mapping), "--scene", "scene_basic_drone.jsonc", "--simconfigpath", str(SIM_CONFIG)]) == 1
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(
+        f"{mapping}:9:10: rule 'mine': ROS name '<namespace>/airsim_node/<robot_name>/actual_pose'"
+    )
+    assert line.endswith("is also produced by rule 'actual_pose' (line 40)")
+
+
+def test_the_shipped_mappings_take_no_name_the_node_owns(scene):
+    for name in ("default", "enu"):
+        for namespace in ("", "/sim2"):
+            assert expand(load_mapping(name), scene, "projectairsim", namespace)

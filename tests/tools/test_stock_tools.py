@@ -1,0 +1,52 @@
+"""Debian's own ROS tools, run by the system interpreter outside the venv, read every message the bridge
+publishes once the message space `make setup` builds (devel/setup.bash) is sourced: radar included. The
+node's /rosout records, as rosout logs them, name their calling file, function and line."""
+
+from __future__ import annotations
+
+import pytest
+from harness import DEVEL_SETUP, Rig, stock_tool
+
+pytestmark = pytest.mark.live
+
+RADAR = "/airsim_node/RadarTower1/radar1"
+
+
+def test_the_stock_tools_read_radar_live_and_from_a_bag(launcher: Rig) -> None:
+    assert DEVEL_SETUP.is_file(), "make setup builds devel/"
+    launcher.roscore()
+    sim = launcher.simserver()
+    node = launcher.node(sim.ports, "--scene", "scene_radar_tower.jsonc")
+    launcher.wait_topics([f"{RADAR}/radar_detections", f"{RADAR}/radar_tracks"], node)
+
+    shown = stock_tool(launcher, "rosmsg show radar_msgs/RadarTracks && rosmsg md5 radar_msgs/RadarScan")
+    assert shown.returncode == 0, shown.stderr
+    assert "uuid_msgs/UniqueID uuid" in shown.stdout and "6dfacef1e665538dbd8e159d5ce7a97a" in shown.stdout
+
+    echo = stock_tool(launcher, f"/usr/bin/rostopic echo -n 1 {RADAR}/radar_detections")
+    assert echo.returncode == 0, echo.stdout + echo.stderr
+    assert 'frame_id: "airsim_node/RadarTower1/radar1"' in echo.stdout and "returns:" in echo.stdout
+
+    bag = launcher.workdir / "radar.bag"
+    record = stock_tool(
+        launcher,
+        f"/usr/bin/rosbag record -q --duration=3 -O {bag} {RADAR}/radar_detections {RADAR}/radar_tracks",
+    )
+    assert record.returncode == 0, record.stderr
+    launcher.stop(node)  # from here on, only the bag publishes radar
+    # rosout's own log: every record of the node names the calling file, line and function
+    (rosout_log,) = [p for p in launcher.workdir.glob("ros_log/*/rosout.log") if p.parent.name != "latest"]
+    records = [line for line in rosout_log.read_text().splitlines() if " /projectairsim [" in line]
+    assert records and not [line for line in records if "threading.py" in line], records[:3]
+    assert any(" [node.py:" in line and "(main)]" in line for line in records), records[:3]
+
+    info = stock_tool(launcher, f"/usr/bin/rosbag info {bag}")
+    assert "radar_msgs/RadarScan" in info.stdout and "radar_msgs/RadarTracks" in info.stdout, info.stdout
+    replay = stock_tool(
+        launcher,
+        f"/usr/bin/rostopic echo -n 1 {RADAR}/radar_tracks > tracks.txt & echoing=$!; sleep 2; "
+        f"/usr/bin/rosbag play -q {bag}; wait $echoing; cat tracks.txt",
+        timeout=60,
+    )
+    assert replay.returncode == 0, replay.stdout + replay.stderr
+    assert "tracks:" in replay.stdout and "radar1" in replay.stdout, replay.stdout
