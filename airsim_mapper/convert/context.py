@@ -31,6 +31,8 @@ class ConvertContext:
     - options: the rule's airsim_mapper.mapping.model.Options (command limits, watchdog).
     - shared: engine-wide mutable state, e.g. camera pose overrides keyed
       ``("camera_pose", robot_name, camera_name)``.
+    - on_clamp: told what a command converter changed to keep a command within its limits (the engine
+      counts and warns); None ignores it.
     """
 
     frame_id: str = ""
@@ -42,6 +44,7 @@ class ConvertContext:
     variables: Mapping[str, str] = field(default_factory=dict)
     options: Any = None
     shared: MutableMapping[Any, Any] = field(default_factory=dict)
+    on_clamp: Callable[[str], None] | None = None
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -52,3 +55,8 @@ class ConvertContext:
     @property
     def enu(self) -> bool:
         return self.convention == ENU
+
+    def clamped(self, what: str) -> None:
+        """A command was changed to keep it within its limits: say what (see `on_clamp`)."""
+        if self.on_clamp is not None:
+            self.on_clamp(what)

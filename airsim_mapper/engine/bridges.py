@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.convert import catalog, registry
-from airsim_mapper.convert.command import require_finite
+from airsim_mapper.convert.command import require_finite, shorten
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
@@ -28,6 +28,7 @@ from airsim_mapper.mapping.model import BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
+SHOWN_ERROR = 500  # characters of a refusal that a log line and the status show
 
 
 @dataclass
@@ -38,6 +39,7 @@ class BridgeStats:
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
     stale_dropped: int = 0  # messages taken before a lazy bridge attached (the simulator's cached frame)
+    clamped: int = 0  # commands changed to keep them within their limits
 
 
 class Throttled:
@@ -75,7 +77,9 @@ class Services:
     replays: dict[str, LatchedReplays] = field(default_factory=dict)
 
 
-def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
+def make_context(
+    spec: BridgeSpec, services: Services, on_clamp: Callable[[str], None] | None = None
+) -> ConvertContext:
     return ConvertContext(
         frame_id=spec.frame_id or "",
         convention=spec.convention,
@@ -86,6 +90,7 @@ def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
         variables=spec.variables,
         options=spec.options,
         shared=services.shared,
+        on_clamp=on_clamp,
     )
 
 
@@ -98,7 +103,7 @@ class Bridge:
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
         self.warn = Throttled(spec.name).warn
-        self.ctx = make_context(spec, services)
+        self.ctx = make_context(spec, services, self.clamped)
 
     def after_call(self, params: dict, result: Any) -> None:
         """The catalogue's after-hook, once the simulator accepted a call (a result other than false)."""
@@ -112,9 +117,15 @@ class Bridge:
         raise NotImplementedError
 
     def fail(self, message: str) -> None:
+        message = shorten(message, SHOWN_ERROR)  # a refused 10 MB frame name is not logged in full
         self.stats.errors += 1
         self.stats.last_error = message
         self.warn(message)
+
+    def clamped(self, what: str) -> None:
+        """A command was clamped to its limits: counted, and warned like a refusal (throttled)."""
+        self.stats.clamped += 1
+        self.warn(shorten(what, SHOWN_ERROR))
 
 
 class SimToRos(Bridge):

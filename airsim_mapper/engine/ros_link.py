@@ -12,6 +12,8 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
+from airsim_mapper.convert.command import shorten
+
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
@@ -130,7 +132,9 @@ class FrameUnknown(LookupError):
     """tf cannot transform a message's frame into the frame a command needs."""
 
     def __init__(self, source: str, target: str, why: str) -> None:
-        super().__init__(f"frame {source!r} cannot be transformed into {target!r} with tf: {why}")
+        super().__init__(
+            f"frame {shorten(source)!r} cannot be transformed into {shorten(target)!r} with tf: {why}"
+        )
 
 
 class TfLookup:

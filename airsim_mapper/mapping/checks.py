@@ -29,7 +29,8 @@ from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
-IMAGE_CONVERTERS = ("image", "streaming_image")  # take params.max_pixels
+IMAGE_CONVERTERS = ("image", "streaming_image")  # take params.max_pixels and params.max_bytes
+IMAGE_BOUNDS = ("max_pixels", "max_bytes")
 
 
 GENPY_HEADER_BYTES = 512
@@ -224,18 +225,20 @@ class _Checker:
     def _options(self, rule: Rule, base: tuple[Any, ...]) -> None:
         raw = self.data["rules"][base[1]]
         self.position_box(base, raw.get("limits"), f"rule '{rule.name}'")
-        if "max_pixels" in rule.params:
-            value = rule.params["max_pixels"]
+        for key in IMAGE_BOUNDS:
+            if key not in rule.params:
+                continue
+            value = rule.params[key]
             if rule.converter not in IMAGE_CONVERTERS:
                 self.add(
-                    (*base, "params", "max_pixels"),
-                    f"rule '{rule.name}': params.max_pixels applies only to the image converters",
+                    (*base, "params", key),
+                    f"rule '{rule.name}': params.{key} applies only to the image converters",
                     True,
                 )
             elif isinstance(value, bool) or not isinstance(value, int) or value <= 0:
                 self.add(
-                    (*base, "params", "max_pixels"),
-                    f"rule '{rule.name}': params.max_pixels must be a positive integer, got {value!r}",
+                    (*base, "params", key),
+                    f"rule '{rule.name}': params.{key} must be a positive integer, got {value!r}",
                 )
         if rule.direction == SIM_TO_ROS:
             for key in ("watchdog_s", "limits"):
