@@ -4,11 +4,13 @@ subscribers, services, the clock) and batched tf."""
 from __future__ import annotations
 
 import importlib
+import select
 import threading
 from collections.abc import Callable
 from typing import Any
 
 import rospy
+import rospy.topics
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
@@ -73,6 +75,7 @@ class RosLink:
     def __init__(self) -> None:
         self.tf = TfBroadcaster()
         self.frames = TfLookup()
+        rospy.topics.Poller = ConnectionPoll  # for every topic made from now on (idempotent)
 
     def publisher(
         self,
@@ -113,6 +116,21 @@ class RosLink:
 
     def close(self) -> None:
         self.frames.close()
+
+
+class ConnectionPoll(rospy.topics.Poller):
+    """rospy's per-topic watch for dead connections, on poll(2) instead of an epoll: no open file per topic.
+
+    rospy gives every topic an epoll object and never closes it; it goes only when the topic is collected,
+    which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
+    1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
+    """
+
+    def __init__(self) -> None:  # rospy's own choice when a platform has no epoll
+        self.poller = select.poll()
+        self.add_fd = self.add_poll
+        self.remove_fd = self.remove_poll
+        self.error_iter = self.error_poll_iter
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:
