@@ -161,6 +161,7 @@ class FakeRos:
     services: dict[str, FakeEndpoint] = field(default_factory=dict)
     transforms: list = field(default_factory=list)
     closed: bool = False
+    tf_cleared: int = 0  # forget_tf calls
     refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
 
     def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
@@ -184,6 +185,9 @@ class FakeRos:
 
     def send_tf(self, transforms: list) -> None:
         self.transforms.extend(transforms)
+
+    def forget_tf(self) -> None:
+        self.tf_cleared += 1
 
     def transform_pose(self, pose_stamped: Any, target: str) -> Any:
         """tf knows no frames here."""

@@ -72,7 +72,7 @@ class Services:
     node_action: Callable[[str, dict], Any]  # an engine action by its catalogue name (load_scene)
     streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
     counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
-    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # /clock going backwards
+    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # simulation time going backwards
     # Per ROS topic, what its engine action (load_scene) last acted on: outlives a re-created subscriber.
     replays: dict[str, LatchedReplays] = field(default_factory=dict)
 
@@ -141,7 +141,6 @@ class SimToRos(Bridge):
         self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
         self._last_publish = -1e9
         self.topic = spec.sim
-        self._is_clock = spec.ros_type == "rosgraph_msgs/Clock"  # what /use_sim_time nodes follow
         # Lazy and "fresh": after attaching, messages taken before this simulator time (ns) are dropped.
         self._fresh_after = 0
 
@@ -209,8 +208,6 @@ class SimToRos(Bridge):
                 return None
         self.stats.messages += 1
         self.stats.last_time = now
-        if self._is_clock:
-            self.services.sim_time.observe(out.clock.to_nsec(), now)
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp
@@ -221,6 +218,10 @@ class SimToRos(Bridge):
         except (ConversionError, KeyError, TypeError, AttributeError) as exc:  # no usable pose in it
             self.fail(f"no transform from a message on {self.topic}: {type(exc).__name__}: {exc}")
             return None
+
+    def new_session(self) -> None:
+        """The simulator's time started over: a stale filter waiting for the old time stops waiting."""
+        self._fresh_after = 0
 
     def _stale(self, message: Any) -> bool:
         """A message taken before the bridge attached (the simulator's cached last frame): dropped and

@@ -16,6 +16,7 @@ from geometry_msgs.msg import TransformStamped
 
 from airsim_mapper.convert.command import shorten
 
+CLEAR_AGAIN_S = 1.0  # tf's buffer is cleared once more this long after a jump back in time
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
@@ -114,6 +115,10 @@ class RosLink:
         """A PoseStamped in the `target` frame, through tf (FrameUnknown when tf cannot)."""
         return self.frames.transform_pose(pose_stamped, target)
 
+    def forget_tf(self) -> None:
+        """Simulation time started over: the transforms of the old time go (`TfLookup.clear`)."""
+        self.frames.clear()
+
     def close(self) -> None:
         self.frames.close()
 
@@ -188,6 +193,20 @@ class TfLookup:
         except tf2_ros.TransformException as exc:
             raise FrameUnknown(source, target, str(exc).splitlines()[0][:200]) from None
         return moved_pose(pose_stamped, transform)
+
+    def clear(self) -> None:
+        """Drop every transform, now and again after CLEAR_AGAIN_S: the node's own /tf messages of the old
+        time still on their way would otherwise fill the buffer again, and tf refuses data more than its
+        cache time older than what it holds (TF_OLD_DATA, on every new transform until the new time passes
+        the old)."""
+        with self._lock:
+            buffer = self._buffer
+        if buffer is None:
+            return
+        buffer.clear()
+        again = threading.Timer(CLEAR_AGAIN_S, buffer.clear)
+        again.daemon = True
+        again.start()
 
     def close(self) -> None:
         with self._lock:
