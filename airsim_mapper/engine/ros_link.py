@@ -76,7 +76,6 @@ class RosLink:
     def __init__(self) -> None:
         self.tf = TfBroadcaster()
         self.frames = TfLookup()
-        rospy.topics.Poller = ConnectionPoll  # for every topic made from now on (idempotent)
 
     def publisher(
         self,
@@ -129,6 +128,7 @@ class ConnectionPoll(rospy.topics.Poller):
     rospy gives every topic an epoll object and never closes it; it goes only when the topic is collected,
     which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
     1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
+    `realtime.tune_process` installs it for every topic made afterwards, with the frozen heap.
     """
 
     def __init__(self) -> None:  # rospy's own choice when a platform has no epoll
