@@ -1,0 +1,33 @@
+"""A signal at any moment of the node's start-up, even its first fraction of a second, stops it cleanly:
+exit status 0, no traceback, within seconds."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import time
+
+import pytest
+from harness import Rig, RosMaster
+
+from reliability.relkit import SCENE, SimPorts, start_node
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_in_the_first_second_of_start_up_stops_the_node_cleanly(
+    launcher: Rig, ros_master: RosMaster, sig: int
+):
+    ports = SimPorts.free()  # nothing listens there: start-up goes on to wait for the simulator
+    outcomes = []
+    for delay in (0.15, 0.3, 0.45, 0.6, 0.8, 1.2):
+        node = start_node(launcher, ports, "--scene", SCENE, node_name="early_signal")
+        time.sleep(delay)
+        node.popen.send_signal(sig)
+        try:
+            code = node.popen.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            code = None
+        outcomes.append((delay, code, "Traceback" in node.output()))
+        launcher.stop(node)
+    print(f"{signal.Signals(sig).name}: (delay s, exit status, traceback) {outcomes}")
+    assert all(code == 0 and not traceback for _, code, traceback in outcomes), outcomes
