@@ -169,3 +169,26 @@ def test_a_bridge_that_cannot_start_stays_off_and_every_other_one_runs(rig: Rig,
     rig.ros.refused = set()
     rig.engine.apply_mapping(edited)  # applying again starts what is missing
     assert "actual_pose[Drone1]" in rig.engine.bridges
+
+
+def test_time_going_back_in_the_pose_stream_starts_tf_and_the_stale_filters_over(rig: Rig, caplog):
+    rig.engine.load_scene(SCENE)
+    pose = "/Sim/SceneDroneSensors/robots/Drone1/actual_pose"
+    sim = rig.links[-1]
+    message = {
+        "time_stamp": 0,
+        "pose": {
+            "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+        },
+    }
+    for seconds in (60, 61, 62):  # the old session; nobody subscribes to /clock
+        assert sim.deliver(pose, {**message, "time_stamp": seconds * 1_000_000_000}) == 1
+    imu = rig.engine.bridges["imu[Drone1/IMU1]"]
+    rig.ros.publishers[IMU_ROS].subscribers(1)  # a lazy bridge attaching waits for time after 62 s
+    assert imu._fresh_after >= 62_000_000_000
+    with caplog.at_level("INFO"):
+        sim.deliver(pose, {**message, "time_stamp": 1_000_000_000})  # the simulator restarted its clock
+    assert rig.engine.sim_time.jumps_back == 1 and rig.ros.tf_cleared == 1
+    assert imu._fresh_after == 0 and rig.engine.hub.sim_now() <= 1_000_000_000
+    assert "tf buffer cleared" in caplog.text
