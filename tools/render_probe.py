@@ -3,9 +3,9 @@
 A one-off measurement behind docs/rendering.md, on the built-in world at 1280x720, four poses in turn:
 - embree: the world tessellated (boxes 12 triangles; spheres as UV spheres of `--sphere-segments`; the
   ground two large triangles), one `rtcIntersect` of every pixel's ray, then the numpy work that only
-  turns hits into a scene image (per-pixel normal lookup, Lambert, checker, haze) as camera.py does;
+  turns hits into a scene image (per-pixel normal lookup, Lambert, checker, haze) as camera_model.py does;
 - gl: `gl_renderer` for the scene image and for all seven types (hits, shading, encodings, read back);
-- raycast: `camera.render_raycast`, the numpy reference.
+- raycast: `raycast_renderer.render_raycast`, the numpy reference.
 Wall ms per render, median. embreex is not a project dependency: `pip install embreex==4.4.0.post1`.
 
     .venv/bin/python -m tools.render_probe [--renders N] [--sphere-segments N]
@@ -21,8 +21,10 @@ from collections.abc import Callable
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
-from airsim_mapper.simserver import camera, gl_renderer
-from airsim_mapper.simserver.world import World, load_world
+from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
+from airsim_mapper.simserver.camera_model import RenderRequest
+from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.world_file import load_world
 from tools.bench.renderers import POSES
 
 WIDTH, HEIGHT, FOV = 1280, 720, 90.0
@@ -68,9 +70,9 @@ def embree_scene_render(world: World, segments: int) -> Callable[[int], object]:
     tris, owner = triangles(world, segments)
     scene = rtcore_scene.EmbreeScene()
     TriangleMesh(scene, tris)
-    rays = camera.camera_rays(WIDTH, HEIGHT, FOV)
+    rays = camera_model.camera_rays(WIDTH, HEIGHT, FOV)
     colours = world.colors_of(owner).T  # (T, 3)
-    sun = (camera.SUN_DIRECTION / np.linalg.norm(camera.SUN_DIRECTION)).astype(np.float32)
+    sun = (camera_model.SUN_DIRECTION / np.linalg.norm(camera_model.SUN_DIRECTION)).astype(np.float32)
     sky = np.asarray(world.sky_color_bgr, np.float32)
 
     def render(i: int) -> bytes:
@@ -82,7 +84,7 @@ def embree_scene_render(world: World, segments: int) -> Callable[[int], object]:
         hit = prim >= 0
         t = np.where(hit, t, np.inf)
         normal /= np.linalg.norm(normal, axis=1, keepdims=True) + 1e-12
-        light = camera._AMBIENT + (1 - camera._AMBIENT) * np.clip(np.abs(normal @ sun), 0, 1)
+        light = camera_model._AMBIENT + (1 - camera_model._AMBIENT) * np.clip(np.abs(normal @ sun), 0, 1)
         shade = colours[np.maximum(prim, 0)] * light[:, None]
         d = np.minimum(t, 1e30).astype(np.float32)
         point = origins + dirs * np.where(hit, d, 0)[:, None]
@@ -101,7 +103,7 @@ def embree_hits(world: World, segments: int) -> Callable[[int], object]:
 
     scene = rtcore_scene.EmbreeScene()
     TriangleMesh(scene, triangles(world, segments)[0])
-    rays = camera.camera_rays(WIDTH, HEIGHT, FOV)
+    rays = camera_model.camera_rays(WIDTH, HEIGHT, FOV)
 
     def hits(i: int) -> object:
         position, orientation = POSES[i % len(POSES)]
@@ -133,17 +135,20 @@ def main() -> None:
     gl = gl_renderer.renderer()
 
     def gl_types(types: list[int]) -> Callable[[int], object]:
-        return lambda i: gl.render(world, *POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, types)
+        return lambda i: gl.render(world, RenderRequest(*POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, types))
 
     rows = {
         "embree: hits only": timed(embree_hits(world, args.sphere_segments), args.renders),
         "embree: hits + numpy scene shading": timed(
             embree_scene_render(world, args.sphere_segments), args.renders
         ),
-        "gl: scene image": timed(gl_types([camera.SCENE]), args.renders),
-        "gl: all seven types": timed(gl_types(list(camera.IMAGE_TYPES)), args.renders),
+        "gl: scene image": timed(gl_types([camera_model.SCENE]), args.renders),
+        "gl: all seven types": timed(gl_types(list(camera_model.IMAGE_TYPES)), args.renders),
         "raycast: scene image": timed(
-            lambda i: camera.render_raycast(world, *POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, [0]), 5
+            lambda i: raycast_renderer.render_raycast(
+                world, RenderRequest(*POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, [0])
+            ),
+            5,
         ),
     }
     print(f"{WIDTH}x{HEIGHT}, median wall ms per render ({gl.description})")

@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from airsim_mapper.simserver.instruments import (
+from airsim_mapper.simserver.instrument_models import (
     BATTERY_CRITICAL,
     BATTERY_LOW,
     BATTERY_OK,

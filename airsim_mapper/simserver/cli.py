@@ -10,7 +10,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from airsim_mapper.simserver import camera
+from airsim_mapper.simserver import rendering
 from airsim_mapper.simserver.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
 from airsim_mapper.tuning import tune_threads
@@ -46,10 +46,10 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument(
         "--renderer",
-        choices=camera.RENDERERS,
+        choices=rendering.RENDERERS,
         default=None,
         help=f"camera renderer: gl (OpenGL on headless EGL; the default) or raycast (the numpy reference, "
-        f"much slower); default: ${camera.RENDERER_ENV}, else gl. Without an OpenGL context gl falls back "
+        f"much slower); default: ${rendering.RENDERER_ENV}, else gl. Without an OpenGL context gl falls back "
         "to raycast and says so once",
     )
     parser.add_argument(
@@ -67,8 +67,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         log.error("--pose-rate must be positive, got %s", args.pose_rate)
         return 2
     if args.renderer is not None:  # the render worker inherits the environment
-        os.environ[camera.RENDERER_ENV] = args.renderer
-        camera.select_renderer(args.renderer)
+        os.environ[rendering.RENDERER_ENV] = args.renderer
+        rendering.select_renderer(args.renderer)
     options = ServerOptions(
         address=args.address,
         topics_port=args.topicsport,

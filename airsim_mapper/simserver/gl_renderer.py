@@ -1,29 +1,29 @@
-"""Camera rendering with OpenGL (moderngl): the seven image types of `camera.py` in one rasterising pass.
+"""Camera rendering with OpenGL (moderngl): the seven image types of `camera_model` in one rasterising pass.
 
 One standalone context per process, made on first use: headless EGL (Mesa's llvmpipe on a machine without
 a GPU, multi-threaded; a GPU's driver where there is one). Boxes are their 12 triangles, spheres are drawn
 as their bounding cubes and solved per fragment, and the ground and sky are a full-screen pass drawn last
 (`gl_shaders.py`; docs/rendering.md).
 Each requested image type is one colour attachment of the same framebuffer, written by the same fragment,
-and read back as the exact bytes `camera.render_raycast` produces (same pinhole, shading, palette and
-encodings); tests/simserver/test_gl_renderer.py compares the two pixel by pixel.
+and read back as the exact bytes the ray caster (`raycast_renderer`) produces (same pinhole, shading,
+palette and encodings); tests/simserver/test_gl_renderer.py compares the two pixel by pixel.
 
 `GLUnavailable` is raised when no OpenGL 4.1 context can be made (no EGL library, no driver) or the
-shaders do not compile on it; `camera.render` then falls back to the ray caster.
+shaders do not compile on it; `rendering.render` then falls back to the ray caster.
 """
 
 from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
-from airsim_mapper.simserver import camera, gl_shaders
+from airsim_mapper.simserver import camera_model, gl_shaders
+from airsim_mapper.simserver.camera_model import RenderedImage, RenderRequest
 from airsim_mapper.simserver.world import World
 
 FRONT_FACE = "cw"  # counter-clockwise in NED appears clockwise in the window (image rows run down)
@@ -31,13 +31,13 @@ GL_VERSION = 410  # the shaders' #version
 NEAR_CLIP = 1e-3  # metres; geometry closer than this to the camera is clipped
 # image type -> (fragment output name, float depth?)
 OUTPUTS = {
-    camera.SCENE: ("scene", False),
-    camera.DEPTH_PLANAR: ("planar", True),
-    camera.DEPTH_PERSPECTIVE: ("perspective", True),
-    camera.SEGMENTATION: ("segmentation", False),
-    camera.DEPTH_VIS: ("depth_vis", False),
-    camera.DISPARITY_NORMALIZED: ("disparity", False),
-    camera.SURFACE_NORMALS: ("normals", False),
+    camera_model.SCENE: ("scene", False),
+    camera_model.DEPTH_PLANAR: ("planar", True),
+    camera_model.DEPTH_PERSPECTIVE: ("perspective", True),
+    camera_model.SEGMENTATION: ("segmentation", False),
+    camera_model.DEPTH_VIS: ("depth_vis", False),
+    camera_model.DISPARITY_NORMALIZED: ("disparity", False),
+    camera_model.SURFACE_NORMALS: ("normals", False),
 }
 _CACHE_LIMIT = 16  # framebuffers (per size and type set) and scenes kept per process
 
@@ -64,18 +64,10 @@ class _Scene:
     sky_bgr: tuple[float, float, float]
 
 
-def _sun() -> np.ndarray:
-    return (camera.SUN_DIRECTION / np.linalg.norm(camera.SUN_DIRECTION)).astype(np.float32)
-
-
 def _face_constants(world: World) -> tuple[np.ndarray, np.ndarray]:
-    """(3, F) lit colours and (3, F) normal colours per face code, computed as the ray caster does."""
-    normals, colors = world.face_table
-    one = np.float32(1.0)
-    light = camera._AMBIENT + (one - camera._AMBIENT) * np.clip(_sun() @ normals, 0.0, 1.0)
-    shade = (colors * light).astype(np.float32)
-    lut = np.where(np.arange(normals.shape[1]) > 0, (normals[::-1] + 1.0) * 127.5 + 0.5, 0.0).astype(np.uint8)
-    return shade, lut.astype(np.float32)
+    """(3, F) lit colours and (3, F) normal colours per face code (float32), as the ray caster has them."""
+    shade, normal_bgr = camera_model.face_constants(world)
+    return shade, normal_bgr.astype(np.float32)
 
 
 # the 2 triangles of a cube face: corner signs along the face's two other axes
@@ -101,7 +93,7 @@ def _box_rows(world: World) -> np.ndarray:
     """(36 B, 15) float32 vertex rows: position, face normal, lit colour, normal colour, segment colour."""
     normals, _ = world.face_table
     shade, normal_bgr = _face_constants(world)
-    palette = camera.segmentation_palette().astype(np.float32)
+    palette = camera_model.segmentation_palette().astype(np.float32)
     rows = []
     boxes = [o for o in world.objects if o.shape == "box"]
     for b, obj in enumerate(boxes):
@@ -118,7 +110,7 @@ def _box_rows(world: World) -> np.ndarray:
 
 def _sphere_rows(world: World) -> np.ndarray:
     """(36 S, 13) float32 vertex rows: bounding-cube position, centre and radius, base colour, segment."""
-    palette = camera.segmentation_palette().astype(np.float32)
+    palette = camera_model.segmentation_palette().astype(np.float32)
     rows = []
     for obj in world.objects:
         if obj.shape != "sphere":
@@ -136,8 +128,8 @@ def clip_from_world(
     position: np.ndarray, rotation: np.ndarray, width: int, height: int, fov_deg: float, far: float
 ) -> np.ndarray:
     """4x4 (float64) from world NED to clip space; window (x, y) = (column + 0.5, row + 0.5) of the pixel
-    whose ray `camera.camera_rays` gives (so image row 0 is the first row glReadPixels returns)."""
-    f = camera.focal_length(width, fov_deg)
+    whose ray `camera_model.camera_rays` gives (so image row 0 is the first row glReadPixels returns)."""
+    f = camera_model.focal_length(width, fov_deg)
     n = NEAR_CLIP
     # camera frame (forward x, right y, down z) -> clip; w_clip = forward distance
     proj = np.array(
@@ -233,7 +225,7 @@ class GLRenderer:
             self._release_scenes()
         boxes, spheres = _box_rows(world), _sphere_rows(world)
         shade, normal_bgr = _face_constants(world)
-        palette = camera.segmentation_palette()
+        palette = camera_model.segmentation_palette()
         scene = _Scene(
             boxes=self.ctx.buffer(boxes.tobytes()) if len(boxes) else None,
             box_vertices=len(boxes),
@@ -309,28 +301,20 @@ class GLRenderer:
 
     # -- rendering
 
-    def draw(
-        self,
-        world: World,
-        position: np.ndarray,
-        orientation: np.ndarray,
-        width: int,
-        height: int,
-        fov_deg: float,
-        kinds: tuple[int, ...],
-        max_depth_vis: float,
-        max_distance: float,
-    ) -> Any:
-        """Render `kinds` (sorted, distinct) into their framebuffer, which is returned for reading (with
-        the context current in this thread)."""
+    def draw(self, world: World, request: RenderRequest, kinds: tuple[int, ...]) -> Any:
+        """Render `kinds` (the request's image types, sorted) into their framebuffer, which is returned for
+        reading (with the context current in this thread)."""
         import moderngl
+
+        width, height, fov_deg = request.width, request.height, request.fov_deg
+        max_distance = request.max_distance
 
         scene = self._scene(world)
         ground, box, sphere = self._vertex_arrays(world, scene, kinds)
-        rotation = quat_to_matrix(np.asarray(orientation, dtype=float))
-        eye = np.asarray(position, dtype=float).reshape(3)
+        rotation = quat_to_matrix(np.asarray(request.orientation, dtype=float))
+        eye = np.asarray(request.position, dtype=float).reshape(3)
         clip = clip_from_world(eye, rotation, width, height, fov_deg, 2.0 * max_distance)
-        f = camera.focal_length(width, fov_deg)
+        f = camera_model.focal_length(width, fov_deg)
         # window (x, y) is pixel (x - 0.5, y - 0.5), whose camera ray is (1, (u - w/2) / f, (v - h/2) / f)
         uniforms = {
             "eye": tuple(eye.astype(np.float32)),
@@ -340,9 +324,9 @@ class GLRenderer:
             "window": (float(width), float(height)),
             "axis": tuple(rotation[:, 0]),
             "max_distance": float(max_distance),
-            "max_depth_vis": float(max_depth_vis),
+            "max_depth_vis": float(request.max_depth_vis),
             "sky_bgr": scene.sky_bgr,
-            "sun": tuple(_sun()),
+            "sun": tuple(camera_model.sun()),
             "clip_from_world": tuple(clip.astype(np.float32).T.ravel()),
             "ground_shade": scene.ground_shade,
             "ground_segment_bgr": scene.ground_segment_bgr,
@@ -372,39 +356,27 @@ class GLRenderer:
             vao.render(moderngl.TRIANGLES, vertices=count)
         return fbo
 
-    def render(
-        self,
-        world: World,
-        position: np.ndarray,
-        orientation: np.ndarray,
-        width: int,
-        height: int,
-        fov_deg: float,
-        image_types: Sequence[int],
-        max_depth_vis: float = camera.DEFAULT_MAX_DEPTH_VIS,
-        max_distance: float = camera.DEFAULT_MAX_DISTANCE,
-    ) -> dict[int, camera.RenderedImage]:
-        """`camera.render` (the request already checked): the same images, rendered with OpenGL."""
-        types = list(dict.fromkeys(image_types))
+    def render(self, world: World, request: RenderRequest) -> dict[int, RenderedImage]:
+        """`rendering.render` (the request already checked): the same images, rendered with OpenGL."""
+        types = request.kinds
         if not types:
             return {}
         import moderngl
 
         kinds = tuple(sorted(types))
-        out: dict[int, camera.RenderedImage] = {}
+        width, height = request.width, request.height
+        out: dict[int, RenderedImage] = {}
         try:
             with self.ctx:  # current in this thread for the render (a context is current per thread)
-                fbo = self.draw(
-                    world, position, orientation, width, height, fov_deg, kinds, max_depth_vis, max_distance
-                )
+                fbo = self.draw(world, request, kinds)
                 for kind in types:
                     i = kinds.index(kind)
                     if OUTPUTS[kind][1]:
                         data = fbo.read(components=1, attachment=i, dtype="f2")
-                        out[kind] = camera.RenderedImage("16FC1", width, height, data)
+                        out[kind] = RenderedImage("16FC1", width, height, data)
                     else:
                         data = fbo.read(components=3, attachment=i, dtype="u1")
-                        out[kind] = camera.RenderedImage("BGR", width, height, data)
+                        out[kind] = RenderedImage("BGR", width, height, data)
         except moderngl.Error as exc:
             raise GLRenderError(f"OpenGL cannot render {width}x{height}: {exc}") from exc
         return out
@@ -423,8 +395,8 @@ def renderer() -> GLRenderer:
         return _RENDERER[1]
 
 
-def render(world: World, *args: Any) -> dict[int, camera.RenderedImage]:
-    """`camera.render` with OpenGL in this process's context; one render at a time per process."""
+def render(world: World, request: RenderRequest) -> dict[int, RenderedImage]:
+    """`rendering.render` with OpenGL in this process's context; one render at a time per process."""
     gl = renderer()
     with _LOCK:
-        return gl.render(world, *args)
+        return gl.render(world, request)

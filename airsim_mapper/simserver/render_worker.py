@@ -3,16 +3,16 @@
 In Project AirSim the GPU renders while the CPU simulates. Here both share the CPU, and a render in the
 server's own process holds its GIL in many short numpy steps while the simulation thread must publish
 poses on time, at the same priority as the ROS nodes downstream. `RenderWorker` renders with
-`camera.render` in a child process at nice +10 (`RENDER_NICE`), in a session and autogroup of its own at
+`rendering.render` in a child process at nice +10 (`RENDER_NICE`), in a session and autogroup of its own at
 the same nice value (`lower_priority`), so on a busy machine the camera rates drop before the pose rate
 does.
 
 The child is `python -m airsim_mapper.simserver.render_worker FD NICE`: it reads requests from one end of
 a socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first message
-is the World; each request is the arguments of `camera.render` after the world; each answer is the dict
-of RenderedImage, or the CameraError it raised.
+is the World; each request is a RenderRequest; each answer is the dict of RenderedImage, or the
+CameraError it raised.
 
-The child renders with `camera.render`, so with OpenGL by default: its EGL context and llvmpipe's threads
+The child renders with `rendering.render`, so with OpenGL by default: its EGL context and llvmpipe's threads
 live in the child, at its priority, made on its first render (docs/rendering.md).
 
 It starts on the first render, is replaced if it dies or hangs, and exits when the server closes its end
@@ -36,9 +36,9 @@ import time
 from collections.abc import Sequence
 from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import Any
 
-from airsim_mapper.simserver import camera
+from airsim_mapper.simserver import rendering
+from airsim_mapper.simserver.camera_model import CameraError, RenderedImage, RenderRequest
 from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.render_worker")
@@ -53,7 +53,7 @@ class RenderWorkerError(RuntimeError):
 
 
 class RenderWorker:
-    """`render(...)` with the signature of `camera.render` minus the world, answered by a child process."""
+    """`rendering.render` of one world, answered by a child process."""
 
     def __init__(self, world: World, nice: int = RENDER_NICE) -> None:
         self.world = world
@@ -74,16 +74,16 @@ class RenderWorker:
     def pid(self) -> int | None:
         return self._proc.pid if self._proc is not None else None
 
-    def render(self, *args: Any) -> dict[int, camera.RenderedImage]:
-        """`camera.render(world, *args)`, answered by the child (pickled as given)."""
+    def render(self, request: RenderRequest) -> dict[int, RenderedImage]:
+        """`rendering.render(world, request)`, answered by the child."""
         with self._lock:
             if self._closed:
                 raise RenderWorkerError("the render worker is closed")
             if self._in_process:
-                return camera.render(self.world, *args)
+                return rendering.render(self.world, request)
             try:
                 conn = self._connection()
-                conn.send(args)
+                conn.send(request)
                 if not conn.poll(ANSWER_TIMEOUT_S):
                     raise RenderWorkerError(f"no answer within {ANSWER_TIMEOUT_S:g} s")
                 answer = conn.recv()
@@ -95,7 +95,7 @@ class RenderWorker:
                     raise RenderWorkerError(f"render worker failed ({reason})") from exc
                 LOG.error("the render worker does not start (%s); rendering in the server process", reason)
                 self._in_process = True
-                return camera.render(self.world, *args)
+                return rendering.render(self.world, request)
             self._answered = True
         if isinstance(answer, Exception):
             raise answer
@@ -212,8 +212,8 @@ def serve(conn: Connection, nice: int) -> None:
         except EOFError:
             return
         try:
-            answer: object = camera.render(world, *request)
-        except camera.CameraError as exc:
+            answer: object = rendering.render(world, request)
+        except CameraError as exc:
             answer = exc
         except Exception as exc:  # a bug in the renderer: the server logs it, the worker stays up
             answer = RenderWorkerError(f"render failed: {exc!r}")

@@ -12,11 +12,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
-from airsim_mapper.simserver.scene import SceneError, SceneSpec, default_scene, parse_scene
+from airsim_mapper.simserver.scene_spec import SceneSpec, SceneSpecError, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
 from airsim_mapper.simserver.session import TRAJECTORY_KEYS, Session, TrajectoryStore
 from airsim_mapper.simserver.topics import TopicHub
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 
 LOG = logging.getLogger("airsim_mapper.simserver")
 
@@ -176,7 +176,7 @@ class SimServer:
             raise ServiceError(f"scene_config must be a JSON string, got {type(text).__name__}")
         try:
             spec = parse_scene(text)
-        except SceneError as exc:
+        except SceneSpecError as exc:
             raise ServiceError(f"Invalid scene config: {exc}") from exc
         with self._scene_lock:
             self._activate(self._session(spec))

@@ -9,12 +9,13 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.simserver import messages
-from airsim_mapper.simserver.clock import SimClock
+from airsim_mapper.simserver.camera_stream import Render
 from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
+from airsim_mapper.simserver.robot_services import robot_methods
 from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.scene import EARTH_RADIUS_M, SceneSpec, topic_table
+from airsim_mapper.simserver.scene_spec import EARTH_RADIUS_M, SceneSpec, topic_table
 from airsim_mapper.simserver.services import Method, ServiceError
-from airsim_mapper.simserver.streams import Render
+from airsim_mapper.simserver.sim_clock import SimClock
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo
 from airsim_mapper.simserver.visual_noops import VisualSettings
 from airsim_mapper.simserver.world import World
@@ -168,7 +169,7 @@ class Session:
         ]
         table += self.visuals.methods(p)
         for robot in self.robots.values():
-            table += robot.methods()
+            table += robot_methods(robot)
         return table
 
     def _set_wind(self, wind: list[float]) -> None:

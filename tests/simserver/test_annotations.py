@@ -10,9 +10,9 @@ import pytest
 
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings, annotate
-from airsim_mapper.simserver.camera import camera_info_message
-from airsim_mapper.simserver.scene import SceneError, parse_scene
-from airsim_mapper.simserver.world import world_from_dict
+from airsim_mapper.simserver.camera_model import camera_info_message
+from airsim_mapper.simserver.scene_spec import SceneSpecError, parse_scene
+from airsim_mapper.simserver.world_file import world_from_dict
 
 ORIGIN, LEVEL = np.zeros(3), quat_from_rpy(0.0, 0.0, 0.0)
 W, H, FOV = 100, 50, 90.0  # f = 50 px on both axes, principal point (50, 25)
@@ -170,5 +170,7 @@ def test_an_invalid_alignment_is_refused_at_scene_load():
     }
     import json
 
-    with pytest.raises(SceneError, match=r"sensor 'Cam': 'annotation-settings\.object-ids' must be a list"):
+    with pytest.raises(
+        SceneSpecError, match=r"sensor 'Cam': 'annotation-settings\.object-ids' must be a list"
+    ):
         parse_scene(json.dumps(scene))

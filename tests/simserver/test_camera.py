@@ -9,15 +9,17 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rotate
-from airsim_mapper.simserver import camera, gl_renderer
-from airsim_mapper.simserver.camera import (
+from airsim_mapper.simserver import gl_renderer, rendering
+from airsim_mapper.simserver.camera_model import (
     CameraError,
+    RenderRequest,
     camera_info_message,
-    render,
     segmentation_color,
     segmentation_palette,
 )
-from airsim_mapper.simserver.world import World, load_world
+from airsim_mapper.simserver.rendering import render
+from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.world_file import load_world
 
 LEVEL_NORTH = quat_from_rpy(0.0, 0.0, 0.0)
 # the robot configs with a DownCamera capturing all seven image types
@@ -27,15 +29,15 @@ SENSOR_ROBOT = {
 }
 
 
-@pytest.fixture(autouse=True, params=camera.RENDERERS)
+@pytest.fixture(autouse=True, params=rendering.RENDERERS)
 def renderer(request: pytest.FixtureRequest):
     """Every test here runs with the OpenGL renderer and with the ray caster (the reference)."""
     if request.param == "gl":
         gl_renderer.renderer()  # no skip: without EGL this fails loudly (`make setup` installs it)
-    camera.select_renderer(request.param)
+    rendering.select_renderer(request.param)
     yield request.param
-    assert camera.renderer_name() == request.param  # the GL renderer did not fall back
-    camera.select_renderer(None)
+    assert rendering.renderer_name() == request.param  # the GL renderer did not fall back
+    rendering.select_renderer(None)
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +89,10 @@ def test_every_configured_image_type_has_the_configured_size_and_encoding(world,
     types = [s["image-type"] for s in settings]
     width, height, fov = settings[0]["width"], settings[0]["height"], settings[0]["fov-degrees"]
     images = render(
-        world, np.array([0.0, 0.0, -4.0]), quat_from_rpy(0, -math.pi / 2, 0), width, height, fov, types
+        world,
+        RenderRequest(
+            np.array([0.0, 0.0, -4.0]), quat_from_rpy(0, -math.pi / 2, 0), width, height, fov, types
+        ),
     )
     assert sorted(images) == list(range(7))
     for kind, image in images.items():
@@ -100,7 +105,9 @@ def test_every_configured_image_type_has_the_configured_size_and_encoding(world,
 def test_depth_equals_the_distance_to_a_box_face_and_perspective_grows_towards_the_edges(world):
     # 2 m south of BlockNorth's south face (x = 28, 8 m wide, 10 m tall): the face fills a 90 degree view
     width, height = 64, 48
-    images = render(world, np.array([26.0, 0.0, -5.0]), LEVEL_NORTH, width, height, 90.0, [1, 2])
+    images = render(
+        world, RenderRequest(np.array([26.0, 0.0, -5.0]), LEVEL_NORTH, width, height, 90.0, [1, 2])
+    )
     planar, perspective = as_array(images[1]), as_array(images[2])
     assert np.allclose(planar, 2.0, atol=2e-3)
     assert perspective[height // 2, width // 2] == pytest.approx(2.0, abs=2e-3)
@@ -114,7 +121,7 @@ def test_depth_equals_the_distance_to_a_box_face_and_perspective_grows_towards_t
 def test_depth_is_infinite_where_the_camera_sees_only_sky(world):
     looking_up = quat_from_rpy(0.0, math.pi / 2, 0.0)
     assert np.allclose(rotate(looking_up, [1.0, 0.0, 0.0]), [0.0, 0.0, -1.0])
-    images = render(world, np.array([0.0, 0.0, -5.0]), looking_up, 32, 24, 60.0, [1, 2, 3])
+    images = render(world, RenderRequest(np.array([0.0, 0.0, -5.0]), looking_up, 32, 24, 60.0, [1, 2, 3]))
     assert np.isposinf(as_array(images[1])).all() and np.isposinf(as_array(images[2])).all()
     assert (as_array(images[3]) == 0).all()
 
@@ -125,7 +132,7 @@ def test_segmentation_colours_identify_ball_ground_and_sky_at_pixels_projected_w
     yaw = math.atan2(ball.center[1] - position[1], ball.center[0] - position[0])
     orientation = quat_from_rpy(0.0, 0.0, yaw)
     width, height = 80, 60
-    images = render(world, position, orientation, width, height, 90.0, [3])
+    images = render(world, RenderRequest(position, orientation, width, height, 90.0, [3]))
     seg = as_array(images[3])
     k = camera_info_message(width, height, 90.0)["intrinsic_camera_matrix"]
 
@@ -152,7 +159,7 @@ def test_scene_image_shades_each_object_in_its_own_colour(world):
     ball = world.object_named("OrangeBall")
     position = np.array([20.0, 15.0, -3.0])  # 5 m west of the ball, looking east
     orientation = quat_from_rpy(0.0, 0.0, math.pi / 2)
-    scene = as_array(render(world, position, orientation, 64, 48, 60.0, [0])[0]).astype(float)
+    scene = as_array(render(world, RenderRequest(position, orientation, 64, 48, 60.0, [0]))[0]).astype(float)
     centre = scene[24, 32]
     base = np.array(ball.color_bgr, dtype=float)
     light = centre[2] / base[2]
@@ -165,7 +172,7 @@ def test_scene_image_shades_each_object_in_its_own_colour(world):
 
 
 def test_surface_normals_depth_vis_and_disparity_encode_a_facing_wall(world):
-    images = render(world, np.array([26.0, 0.0, -5.0]), LEVEL_NORTH, 32, 24, 60.0, [4, 5, 6])
+    images = render(world, RenderRequest(np.array([26.0, 0.0, -5.0]), LEVEL_NORTH, 32, 24, 60.0, [4, 5, 6]))
     normals = as_array(images[6])
     assert (normals[12, 16] == [128, 128, 0]).all()  # world normal (-1, 0, 0): B = z, G = y, R = x
     assert (as_array(images[4])[12, 16] == round(2.0 / 100.0 * 255)).all()
@@ -173,9 +180,9 @@ def test_surface_normals_depth_vis_and_disparity_encode_a_facing_wall(world):
 
 
 def test_only_the_requested_types_are_rendered(world):
-    images = render(world, np.array([0.0, 0.0, -4.0]), LEVEL_NORTH, 16, 12, 90.0, [3, 0, 3])
+    images = render(world, RenderRequest(np.array([0.0, 0.0, -4.0]), LEVEL_NORTH, 16, 12, 90.0, [3, 0, 3]))
     assert sorted(images) == [0, 3]
-    assert render(world, np.array([0.0, 0.0, -4.0]), LEVEL_NORTH, 16, 12, 90.0, []) == {}
+    assert render(world, RenderRequest(np.array([0.0, 0.0, -4.0]), LEVEL_NORTH, 16, 12, 90.0, [])) == {}
 
 
 @pytest.mark.parametrize(
@@ -188,7 +195,7 @@ def test_only_the_requested_types_are_rendered(world):
 )
 def test_invalid_render_requests_are_refused(world, size, fov, types, message):
     with pytest.raises(CameraError) as caught:
-        render(world, np.zeros(3), LEVEL_NORTH, size[0], size[1], fov, types)
+        render(world, RenderRequest(np.zeros(3), LEVEL_NORTH, size[0], size[1], fov, types))
     assert str(caught.value) == message
 
 
@@ -206,9 +213,9 @@ class PublishedImages:
 
 
 def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(world):
+    from airsim_mapper.simserver.camera_stream import CameraStream
     from airsim_mapper.simserver.motion import Body
-    from airsim_mapper.simserver.scene import CaptureSetting, SensorSpec
-    from airsim_mapper.simserver.streams import CameraStream
+    from airsim_mapper.simserver.scene_spec import CaptureSetting, SensorSpec
 
     captures = (
         CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),

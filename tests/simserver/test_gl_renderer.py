@@ -24,8 +24,10 @@ import numpy as np
 import pytest
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
-from airsim_mapper.simserver import camera, gl_renderer
-from airsim_mapper.simserver.world import World, load_world, world_from_dict
+from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer, rendering
+from airsim_mapper.simserver.camera_model import RenderRequest
+from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.world_file import load_world, world_from_dict
 
 EDGE_FRACTION = 0.005  # of an image's pixels: edges may disagree, nothing else
 FAR_M = 200.0  # beyond this the horizon's grazing rays amplify float32 rounding; only the fraction applies
@@ -69,7 +71,7 @@ def worlds() -> dict[str, World]:
     return {"default": load_world(), "test": world_from_dict(TEST_WORLD, "<test world>")}
 
 
-def pixels(image: camera.RenderedImage) -> np.ndarray:
+def pixels(image: camera_model.RenderedImage) -> np.ndarray:
     if image.encoding == "16FC1":
         return np.frombuffer(image.data, dtype="<f2").reshape(image.height, image.width).astype(np.float32)
     return np.frombuffer(image.data, dtype=np.uint8).reshape(image.height, image.width, 3).astype(np.int16)
@@ -89,7 +91,7 @@ def interior(segmentation: np.ndarray, depth: np.ndarray, cells: np.ndarray) -> 
 
 def checker_cells(position, orientation, depth: np.ndarray) -> np.ndarray:
     """(H, W) 0-3: the 2 m ground cell (x and y parity) each pixel's hit lies in (float64), 0 for the sky."""
-    rays = quat_to_matrix(orientation) @ camera.camera_rays(WIDTH, HEIGHT, FOV).astype(np.float64)
+    rays = quat_to_matrix(orientation) @ camera_model.camera_rays(WIDTH, HEIGHT, FOV).astype(np.float64)
     with np.errstate(invalid="ignore"):
         hit = np.asarray(position, float)[:, None] + rays * depth.astype(np.float64).ravel()
         cell = np.floor(np.nan_to_num(hit[:2] / 2.0, posinf=0.0, neginf=0.0)).astype(np.int64) & 1
@@ -98,7 +100,7 @@ def checker_cells(position, orientation, depth: np.ndarray) -> np.ndarray:
 
 def agreement(kind: int, gl: np.ndarray, ray: np.ndarray, flat: np.ndarray) -> np.ndarray:
     """Per pixel: does the GL pixel agree with the ray caster's (rules in the module docstring)?"""
-    if kind in camera.DEPTH_TYPES:
+    if kind in camera_model.DEPTH_TYPES:
         both_inf = np.isinf(gl) & np.isinf(ray)
         finite = np.isfinite(gl) & np.isfinite(ray)
         with np.errstate(invalid="ignore", over="ignore"):
@@ -106,9 +108,9 @@ def agreement(kind: int, gl: np.ndarray, ray: np.ndarray, flat: np.ndarray) -> n
             close = np.abs(gl - ray) <= np.maximum(0.01, step)
         return both_inf | (finite & close)
     diff = np.abs(gl - ray).max(axis=2)
-    if kind == camera.SEGMENTATION:
+    if kind == camera_model.SEGMENTATION:
         return diff == 0
-    if kind in (camera.SCENE, camera.SURFACE_NORMALS):
+    if kind in (camera_model.SCENE, camera_model.SURFACE_NORMALS):
         return np.where(flat, diff == 0, diff <= 1)
     return diff <= 1  # depth vis, disparity
 
@@ -117,16 +119,23 @@ def agreement(kind: int, gl: np.ndarray, ray: np.ndarray, flat: np.ndarray) -> n
 def test_every_image_type_matches_the_ray_caster_pixel_by_pixel(worlds, pose):
     world_name, position, roll, pitch, yaw = POSES[pose]
     world = worlds[world_name]
-    args = (np.array(position), quat_from_rpy(roll, pitch, yaw), WIDTH, HEIGHT, FOV, list(camera.IMAGE_TYPES))
-    gl = {k: pixels(v) for k, v in gl_renderer.render(world, *args).items()}
-    ray = {k: pixels(v) for k, v in camera.render_raycast(world, *args).items()}
-    seg, depth = ray[camera.SEGMENTATION], ray[camera.DEPTH_PERSPECTIVE]
+    args = (
+        np.array(position),
+        quat_from_rpy(roll, pitch, yaw),
+        WIDTH,
+        HEIGHT,
+        FOV,
+        list(camera_model.IMAGE_TYPES),
+    )
+    gl = {k: pixels(v) for k, v in gl_renderer.render(world, RenderRequest(*args)).items()}
+    ray = {k: pixels(v) for k, v in raycast_renderer.render_raycast(world, RenderRequest(*args)).items()}
+    seg, depth = ray[camera_model.SEGMENTATION], ray[camera_model.DEPTH_PERSPECTIVE]
     sphere_ids = [o.segmentation_id for o in world.objects if o.shape == "sphere"]
     on_sphere = np.zeros(depth.shape, dtype=bool)
     for i in sphere_ids:
-        on_sphere |= (seg == camera.segmentation_color(i)).all(axis=2)
+        on_sphere |= (seg == camera_model.segmentation_color(i)).all(axis=2)
     inside = interior(seg, depth, checker_cells(args[0], args[1], depth))
-    for kind in camera.IMAGE_TYPES:
+    for kind in camera_model.IMAGE_TYPES:
         agrees = agreement(kind, gl[kind], ray[kind], ~on_sphere)
         fraction = 1.0 - agrees.mean()
         assert fraction <= EDGE_FRACTION, f"{pose}: type {kind}: {fraction:.2%} of the pixels differ"
@@ -147,12 +156,14 @@ def test_the_poses_see_what_they_are_meant_to(worlds):
             WIDTH,
             HEIGHT,
             FOV,
-            [camera.SEGMENTATION],
+            [camera_model.SEGMENTATION],
         )
-        seg = pixels(gl_renderer.render(world, *args)[camera.SEGMENTATION])
+        seg = pixels(gl_renderer.render(world, RenderRequest(*args))[camera_model.SEGMENTATION])
         colours = {tuple(int(c) for c in p) for p in seg.reshape(-1, 3)[::7]}
-        names = {o.name for o in world.objects if camera.segmentation_color(o.segmentation_id) in colours}
-        if camera.segmentation_color(world.ground_segmentation_id) in colours:
+        names = {
+            o.name for o in world.objects if camera_model.segmentation_color(o.segmentation_id) in colours
+        }
+        if camera_model.segmentation_color(world.ground_segmentation_id) in colours:
             names.add("ground")
         if (0, 0, 0) in colours:
             names.add("sky")
@@ -172,15 +183,15 @@ def test_render_falls_back_to_the_ray_caster_once_without_a_gl_context(monkeypat
     world = load_world()
     args = (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.3, 0.0), 32, 24, 90.0, [0, 1, 3])
     monkeypatch.setattr(gl_renderer, "renderer", unavailable)
-    camera.select_renderer("gl")
+    rendering.select_renderer("gl")
     try:
-        with caplog.at_level(logging.ERROR, logger="airsim_mapper.simserver.camera"):
-            first = camera.render(world, *args)
-            second = camera.render(world, *args)
-        assert camera.renderer_name() == "raycast"
+        with caplog.at_level(logging.ERROR, logger="airsim_mapper.simserver.rendering"):
+            first = rendering.render(world, RenderRequest(*args))
+            second = rendering.render(world, RenderRequest(*args))
+        assert rendering.renderer_name() == "raycast"
     finally:
-        camera.select_renderer(None)
-    want = camera.render_raycast(world, *args)
+        rendering.select_renderer(None)
+    want = raycast_renderer.render_raycast(world, RenderRequest(*args))
     assert first == want and second == want
     errors = [r.getMessage() for r in caplog.records]
     assert len(errors) == 1 and "no EGL here" in errors[0] and "ray caster" in errors[0]
@@ -190,31 +201,33 @@ def test_a_size_beyond_the_drivers_limit_is_ray_cast_with_a_warning_and_gl_goes_
     world = load_world()
     pose = (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.3, 0.0))
     limit = gl_renderer.renderer().ctx.info["GL_MAX_RENDERBUFFER_SIZE"]
-    camera.select_renderer("gl")
+    rendering.select_renderer("gl")
     try:
-        with caplog.at_level(logging.WARNING, logger="airsim_mapper.simserver.camera"):
-            wide = camera.render(world, *pose, limit + 1, 2, 90.0, [0, 1])
-        assert wide == camera.render_raycast(world, *pose, limit + 1, 2, 90.0, [0, 1])
+        with caplog.at_level(logging.WARNING, logger="airsim_mapper.simserver.rendering"):
+            wide = rendering.render(world, RenderRequest(*pose, limit + 1, 2, 90.0, [0, 1]))
+        assert wide == raycast_renderer.render_raycast(
+            world, RenderRequest(*pose, limit + 1, 2, 90.0, [0, 1])
+        )
         assert f"OpenGL cannot render {limit + 1}x2" in caplog.text and "ray casting this one" in caplog.text
-        assert camera.renderer_name() == "gl"
-        assert camera.render(world, *pose, 64, 48, 90.0, [0]) == gl_renderer.render(
-            world, *pose, 64, 48, 90.0, [0]
+        assert rendering.renderer_name() == "gl"
+        assert rendering.render(world, RenderRequest(*pose, 64, 48, 90.0, [0])) == gl_renderer.render(
+            world, RenderRequest(*pose, 64, 48, 90.0, [0])
         )
     finally:
-        camera.select_renderer(None)
+        rendering.select_renderer(None)
 
 
 def test_the_renderer_is_chosen_by_the_environment(monkeypatch, caplog):
     try:
         for value, want in (("raycast", "raycast"), ("GL", "gl"), ("", "gl"), ("vulkan", "gl")):
-            monkeypatch.setenv(camera.RENDERER_ENV, value)
-            camera.select_renderer(None)
-            assert camera.renderer_name() == want
+            monkeypatch.setenv(rendering.RENDERER_ENV, value)
+            rendering.select_renderer(None)
+            assert rendering.renderer_name() == want
         assert "vulkan" in caplog.text
-        with pytest.raises(camera.CameraError, match="unknown renderer 'vulkan'"):
-            camera.select_renderer("vulkan")
+        with pytest.raises(camera_model.CameraError, match="unknown renderer 'vulkan'"):
+            rendering.select_renderer("vulkan")
     finally:
-        camera.select_renderer(None)
+        rendering.select_renderer(None)
 
 
 def test_the_gl_renderer_keeps_one_context_and_reuses_its_resources(worlds):
@@ -223,7 +236,9 @@ def test_the_gl_renderer_keeps_one_context_and_reuses_its_resources(worlds):
     assert gl_renderer.renderer() is gl
     assert gl.description  # "llvmpipe (LLVM ...), 4.5 (Core Profile) Mesa ..." here; a GPU's driver elsewhere
     for size in ((64, 48), (32, 24), (64, 48)):
-        gl_renderer.render(world, np.zeros(3) - [0, 0, 3], quat_from_rpy(0, 0, 0), *size, 90.0, [0, 2])
+        gl_renderer.render(
+            world, RenderRequest(np.zeros(3) - [0, 0, 3], quat_from_rpy(0, 0, 0), *size, 90.0, [0, 2])
+        )
     assert {(w, h) for w, h, _ in gl._framebuffers} >= {(64, 48), (32, 24)}
     assert len(gl._programs) >= 1 and len(gl._scenes) >= 1
 
@@ -231,10 +246,12 @@ def test_the_gl_renderer_keeps_one_context_and_reuses_its_resources(worlds):
 def test_a_render_from_another_thread_gives_the_same_images(worlds):
     """The context is made current in whichever thread renders (the server's sensor thread, in process)."""
     args = (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.2, 0.6), 64, 48, 90.0, [0, 2, 3])
-    here = gl_renderer.render(worlds["default"], *args)
+    here = gl_renderer.render(worlds["default"], RenderRequest(*args))
     there: dict[str, object] = {}
     world = worlds["default"]
-    thread = threading.Thread(target=lambda: there.update(images=gl_renderer.render(world, *args)))
+    thread = threading.Thread(
+        target=lambda: there.update(images=gl_renderer.render(world, RenderRequest(*args)))
+    )
     thread.start()
     thread.join()
     assert there["images"] == here
@@ -247,9 +264,9 @@ def test_odd_sizes_and_fields_of_view_match_the_ray_caster(worlds, width, height
     """The pinhole holds for odd and tiny sizes, wide and narrow views (the principal point at w/2, h/2)."""
     world = worlds["default"]
     for position, rpy in (((0.0, 0.0, -4.0), (0.0, -0.3, 0.5)), ((20.0, 20.0, -3.0), (0.0, 0.0, 0.0))):
-        args = (np.array(position), quat_from_rpy(*rpy), width, height, fov, list(camera.IMAGE_TYPES))
-        gl = {k: pixels(v) for k, v in gl_renderer.render(world, *args).items()}
-        ray = {k: pixels(v) for k, v in camera.render_raycast(world, *args).items()}
-        for kind in camera.IMAGE_TYPES:
+        args = (np.array(position), quat_from_rpy(*rpy), width, height, fov, list(camera_model.IMAGE_TYPES))
+        gl = {k: pixels(v) for k, v in gl_renderer.render(world, RenderRequest(*args)).items()}
+        ray = {k: pixels(v) for k, v in raycast_renderer.render_raycast(world, RenderRequest(*args)).items()}
+        for kind in camera_model.IMAGE_TYPES:
             differ = (~agreement(kind, gl[kind], ray[kind], np.ones((height, width), dtype=bool))).sum()
             assert differ <= EDGE_FRACTION * width * height + 1, (position, kind, differ)

@@ -8,10 +8,8 @@ import numpy as np
 import pytest
 
 from airsim_mapper.geometry import IDENTITY_Q, quat_from_rpy, yaw_of
-from airsim_mapper.simserver.motion import (
-    Body,
-    Hold,
-    Kinematic,
+from airsim_mapper.simserver.motion import Body, Hold, Kinematic, wrap_angle
+from airsim_mapper.simserver.motion_commands import (
     Land,
     Path,
     Rotate,
@@ -19,7 +17,6 @@ from airsim_mapper.simserver.motion import (
     YawMode,
     body_to_world_velocity,
     turn_rate,
-    wrap_angle,
 )
 
 DT = 0.005

@@ -12,14 +12,15 @@ import numpy as np
 import pytest
 from harness import wait_until
 
-from airsim_mapper.simserver import camera, render_worker
+from airsim_mapper.simserver import camera_model, raycast_renderer, render_worker, rendering
+from airsim_mapper.simserver.camera_model import RenderRequest
 from airsim_mapper.simserver.render_worker import (
     RENDER_NICE,
     RenderWorker,
     RenderWorkerError,
     set_autogroup_nice,
 )
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.world_file import load_world
 from simserver.clientkit import load_world as load_scene
 
 pytestmark = pytest.mark.live  # the render worker is a child process
@@ -48,9 +49,9 @@ def worker():
 
 
 def test_the_worker_renders_every_type_byte_for_byte_like_an_in_process_render(worker):
-    types = list(camera.IMAGE_TYPES)
-    got = worker.render(POSITION, ORIENTATION, 160, 120, 90.0, types, 30.0)
-    want = camera.render(load_world(), POSITION, ORIENTATION, 160, 120, 90.0, types, 30.0)
+    types = list(camera_model.IMAGE_TYPES)
+    got = worker.render(RenderRequest(POSITION, ORIENTATION, 160, 120, 90.0, types, 30.0))
+    want = rendering.render(load_world(), RenderRequest(POSITION, ORIENTATION, 160, 120, 90.0, types, 30.0))
     assert sorted(got) == types
     for kind in types:
         assert got[kind] == want[kind], f"image type {kind} differs"
@@ -64,11 +65,13 @@ def test_a_default_socket_timeout_does_not_make_the_worker_fail_between_requests
     socket.setdefaulttimeout(60.0)
     rw = RenderWorker(load_world())
     try:
-        rw.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+        rw.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
         pid = rw.pid
         time.sleep(0.3)  # the child waits for its next request: a non-blocking read would fail here
         assert alive(pid)
-        rw.render(POSITION, ORIENTATION, 320, 240, 90.0, list(camera.IMAGE_TYPES))  # large answers too
+        rw.render(
+            RenderRequest(POSITION, ORIENTATION, 320, 240, 90.0, list(camera_model.IMAGE_TYPES))
+        )  # large answers too
         assert (rw.pid, rw.restarts) == (pid, 0)
     finally:
         socket.setdefaulttimeout(previous)
@@ -77,33 +80,33 @@ def test_a_default_socket_timeout_does_not_make_the_worker_fail_between_requests
 
 def test_the_worker_starts_on_the_first_render_at_a_lower_priority_and_stops_on_close(worker):
     assert worker.pid is None
-    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     pid = worker.pid
     assert nice_of(pid) == min(19, os.nice(0) + RENDER_NICE)
     worker.close()
     assert not alive(pid)
     with pytest.raises(RenderWorkerError, match="closed"):
-        worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+        worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
 
 
 def test_a_bad_request_raises_its_camera_error_and_the_worker_stays_up(worker):
-    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     pid = worker.pid
-    with pytest.raises(camera.CameraError, match="image size must be positive"):
-        worker.render(POSITION, ORIENTATION, 0, 24, 90.0, [0])
-    with pytest.raises(camera.CameraError, match="unknown image type 9"):
-        worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [9])
-    assert worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [1])[1].encoding == "16FC1"
+    with pytest.raises(camera_model.CameraError, match="image size must be positive"):
+        worker.render(RenderRequest(POSITION, ORIENTATION, 0, 24, 90.0, [0]))
+    with pytest.raises(camera_model.CameraError, match="unknown image type 9"):
+        worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [9]))
+    assert worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [1]))[1].encoding == "16FC1"
     assert worker.pid == pid and worker.restarts == 0
 
 
 def test_a_killed_worker_is_replaced_on_the_next_render_with_a_warning(worker, caplog):
-    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     first = worker.pid
     os.kill(first, signal.SIGKILL)
     wait_until(lambda: worker._proc.poll() is not None, 5.0, what="the worker to die")
     with caplog.at_level(logging.WARNING, logger=render_worker.LOG.name):
-        image = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])[0]
+        image = worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))[0]
     assert (image.width, image.height, len(image.data)) == (32, 24, 32 * 24 * 3)
     assert worker.pid != first and worker.restarts == 1
     assert f"render worker {first} exited (code -9); starting a new one" in caplog.text
@@ -111,15 +114,15 @@ def test_a_killed_worker_is_replaced_on_the_next_render_with_a_warning(worker, c
 
 def test_a_hung_worker_is_killed_after_the_answer_timeout_and_then_replaced(worker, monkeypatch):
     monkeypatch.setattr(render_worker, "ANSWER_TIMEOUT_S", 0.5)
-    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     hung = worker.pid
     os.kill(hung, signal.SIGSTOP)
     start = time.monotonic()
     with pytest.raises(RenderWorkerError, match=r"no answer within 0\.5 s"):
-        worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+        worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     assert time.monotonic() - start < 5.0
     assert not alive(hung)
-    assert worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])[0].width == 32
+    assert worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))[0].width == 32
     assert worker.pid != hung
 
 
@@ -169,23 +172,23 @@ def test_a_worker_that_cannot_start_is_reported_once_and_the_server_renders_in_p
 ):
     monkeypatch.setattr(render_worker, "_command", lambda fd, nice: ["/bin/false"])
     with caplog.at_level(logging.ERROR, logger=render_worker.LOG.name):
-        first = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3])
-        second = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3])
-    want = camera.render(load_world(), POSITION, ORIENTATION, 32, 24, 90.0, [0, 3])
+        first = worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3]))
+        second = worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3]))
+    want = rendering.render(load_world(), RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0, 3]))
     assert first == want and second == want
     assert caplog.text.count("the render worker does not start") == 1
     assert worker.starts == 1 and worker.pid is None
 
 
 def test_a_replacement_that_cannot_start_falls_back_to_rendering_in_process(worker, monkeypatch, caplog):
-    worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+    worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
     first = worker.pid
     monkeypatch.setattr(render_worker, "_command", lambda fd, nice: ["/bin/false"])
     os.kill(first, signal.SIGKILL)
     wait_until(lambda: worker._proc.poll() is not None, 5.0, what="the worker to die")
     with caplog.at_level(logging.WARNING, logger=render_worker.LOG.name):
-        image = worker.render(POSITION, ORIENTATION, 32, 24, 90.0, [3])[3]
-    assert image == camera.render(load_world(), POSITION, ORIENTATION, 32, 24, 90.0, [3])[3]
+        image = worker.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [3]))[3]
+    assert image == rendering.render(load_world(), RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [3]))[3]
     assert "the render worker does not start" in caplog.text and worker.starts == 2
 
 
@@ -214,7 +217,7 @@ def test_the_autogroup_write_waits_out_the_kernels_rate_limit_and_reports_a_refu
 def test_a_worker_at_the_servers_priority_stays_in_the_servers_session():
     rw = RenderWorker(load_world(), nice=0)
     try:
-        rw.render(POSITION, ORIENTATION, 32, 24, 90.0, [0])
+        rw.render(RenderRequest(POSITION, ORIENTATION, 32, 24, 90.0, [0]))
         assert os.getsid(rw.pid) == os.getsid(0)
         assert nice_of(rw.pid) == nice_of(os.getpid())
     finally:
@@ -239,12 +242,14 @@ def test_the_server_renders_with_gl_in_its_worker_unless_told_to_ray_cast(launch
 
 def test_a_worker_without_opengl_ray_casts_and_says_so_once(monkeypatch, capfd):
     monkeypatch.setenv("AIRSIM_MAPPER_GL_BACKEND", "no-such-backend")  # the child cannot make a context
-    monkeypatch.setenv(camera.RENDERER_ENV, "gl")
+    monkeypatch.setenv(rendering.RENDERER_ENV, "gl")
     rw = RenderWorker(load_world())
     try:
-        types = list(camera.IMAGE_TYPES)
-        got = [rw.render(POSITION, ORIENTATION, 64, 48, 90.0, types, 30.0) for _ in range(2)]
-        want = camera.render_raycast(load_world(), POSITION, ORIENTATION, 64, 48, 90.0, types, 30.0)
+        types = list(camera_model.IMAGE_TYPES)
+        got = [rw.render(RenderRequest(POSITION, ORIENTATION, 64, 48, 90.0, types, 30.0)) for _ in range(2)]
+        want = raycast_renderer.render_raycast(
+            load_world(), RenderRequest(POSITION, ORIENTATION, 64, 48, 90.0, types, 30.0)
+        )
         assert got[0] == want and got[1] == want
         assert rw.restarts == 0
     finally:

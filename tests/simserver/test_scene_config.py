@@ -9,8 +9,8 @@ import pytest
 from harness import SIM_CONFIG
 from simconfigs import EXAMPLE_SCENES, scenes_of
 
-from airsim_mapper.simserver.scene import (
-    SceneError,
+from airsim_mapper.simserver.scene_spec import (
+    SceneSpecError,
     default_scene,
     geo_to_ned,
     info_topic_path,
@@ -314,7 +314,7 @@ def set_sensor(scene: dict, sensor: dict) -> None:
     ],
 )
 def test_invalid_scenes_are_rejected_with_a_message_saying_what_is_wrong(text, message):
-    with pytest.raises(SceneError, match=message):
+    with pytest.raises(SceneSpecError, match=message):
         parse_scene(text)
 
 

@@ -1,6 +1,6 @@
 """Camera renders per second of the headless server's two renderers, side by side in one process.
 
-The OpenGL renderer (`gl_renderer`, llvmpipe without a GPU) and the numpy ray caster (`camera.render_raycast`)
+The OpenGL renderer (`gl_renderer`, llvmpipe without a GPU) and the numpy ray caster (`raycast_renderer`)
 render the same camera poses over the built-in world, one render after another in this process, as the
 render worker does: 1280x720 scene, all seven types at 1280x720, 1920x1080 scene. Renders per second are
 1 / the median wall time of one render (the figure that bounds a camera's rate); CPU time per render is
@@ -23,13 +23,14 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver import camera, gl_renderer
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
+from airsim_mapper.simserver.camera_model import RenderRequest
+from airsim_mapper.simserver.world_file import load_world
 
 CASES = {  # name: (width, height, image types)
-    "scene 1280x720": (1280, 720, (camera.SCENE,)),
-    "all seven 1280x720": (1280, 720, camera.IMAGE_TYPES),
-    "scene 1920x1080": (1920, 1080, (camera.SCENE,)),
+    "scene 1280x720": (1280, 720, (camera_model.SCENE,)),
+    "all seven 1280x720": (1280, 720, camera_model.IMAGE_TYPES),
+    "scene 1920x1080": (1920, 1080, (camera_model.SCENE,)),
 }
 TARGETS = {"scene 1280x720": 60.0, "all seven 1280x720": 30.0, "scene 1920x1080": 30.0}  # renders/s, GL
 FOV = 90.0
@@ -72,12 +73,12 @@ def run(gl_renders: int = GL_RENDERS, raycast_renders: int = RAYCAST_RENDERS) ->
         out["gl_error"] = str(exc)
     for name, (width, height, types) in CASES.items():
 
-        def call(render: Callable[..., object]) -> Callable[[int], object]:
-            return lambda i: render(world, *POSES[i % len(POSES)], width, height, FOV, list(types))  # noqa: B023
+        def call(render: Callable[..., object], size=(width, height), types=types) -> Callable[[int], object]:
+            return lambda i: render(world, RenderRequest(*POSES[i % len(POSES)], *size, FOV, list(types)))
 
         if gl is not None:
             out["gl"][name] = measure(call(gl.render), gl_renders)
-        out["raycast"][name] = measure(call(camera.render_raycast), raycast_renders)
+        out["raycast"][name] = measure(call(raycast_renderer.render_raycast), raycast_renders)
     return out
 
 

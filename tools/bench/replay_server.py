@@ -15,11 +15,13 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver import camera, lidar
+from airsim_mapper.simserver import camera_model, lidar_model, rendering
+from airsim_mapper.simserver.camera_model import RenderRequest
 from airsim_mapper.simserver.cli import main as server_main
 
 MAX_RENDER_PIXELS = 320 * 240
@@ -37,35 +39,27 @@ def _reduction(width: int, height: int) -> int:
     return max(f for f in range(1, 9) if width % f == 0 and height % f == 0)
 
 
-def _upscale(image: camera.RenderedImage, factor: int, width: int, height: int) -> camera.RenderedImage:
+def _upscale(
+    image: camera_model.RenderedImage, factor: int, width: int, height: int
+) -> camera_model.RenderedImage:
     channels = 3 if image.encoding == "BGR" else 1
     dtype = np.uint8 if image.encoding == "BGR" else np.dtype("<f2")
     pixels = np.frombuffer(image.data, dtype=dtype).reshape(image.height, image.width, channels)
     big = np.repeat(np.repeat(pixels, factor, axis=0), factor, axis=1)
-    return camera.RenderedImage(image.encoding, width, height, np.ascontiguousarray(big).tobytes())
+    return camera_model.RenderedImage(image.encoding, width, height, np.ascontiguousarray(big).tobytes())
 
 
 def cached_render(real_render: Any) -> Any:
-    cache: dict[tuple, dict[int, camera.RenderedImage]] = {}
+    cache: dict[tuple, dict[int, camera_model.RenderedImage]] = {}
 
-    def render(
-        world: Any,
-        position: Any,
-        orientation: Any,
-        width: int,
-        height: int,
-        fov: float,
-        types: Any,
-        *more: Any,
-    ):
-        """`camera.render`'s signature; `more` (depth scale, range) is part of the cache key."""
-        key = (width, height, float(fov), tuple(types), *more)
+    def render(world: Any, request: RenderRequest) -> dict[int, camera_model.RenderedImage]:
+        """`rendering.render`'s signature; the depth scale and range are part of the cache key."""
+        r = request
+        key = (r.width, r.height, float(r.fov_deg), tuple(r.image_types), r.max_depth_vis, r.max_distance)
         if key not in cache:
-            factor = _reduction(width, height)
-            small = real_render(
-                world, position, orientation, width // factor, height // factor, fov, types, *more
-            )
-            cache[key] = {t: _upscale(img, factor, width, height) for t, img in small.items()}
+            factor = _reduction(r.width, r.height)
+            small = real_render(world, replace(r, width=r.width // factor, height=r.height // factor))
+            cache[key] = {t: _upscale(img, factor, r.width, r.height) for t, img in small.items()}
         return cache[key]
 
     return render
@@ -76,7 +70,9 @@ def cached_scan(real_scan: Any) -> Any:
     many as the call's time span sweeps (a physics tick's segment, or several), cycling through it."""
     cache: dict[int, tuple[dict[str, Any], list[int]]] = {}
 
-    def scan(self: lidar.LidarModel, world: Any, position: Any, orientation: Any, start_ns: int, end_ns: int):
+    def scan(
+        self: lidar_model.LidarModel, world: Any, position: Any, orientation: Any, start_ns: int, end_ns: int
+    ):
         if id(self) not in cache:
             period = int(1e9 / self.rotation_hz)
             cache[id(self)] = (real_scan(self, world, position, orientation, end_ns - period, end_ns), [0])
@@ -95,8 +91,8 @@ def cached_scan(real_scan: Any) -> Any:
 
 
 def install_replay() -> None:
-    camera.render = cached_render(camera.render)
-    lidar.LidarModel.scan = cached_scan(lidar.LidarModel.scan)
+    rendering.render = cached_render(rendering.render)
+    lidar_model.LidarModel.scan = cached_scan(lidar_model.LidarModel.scan)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -25,9 +25,10 @@ from collections.abc import Callable
 import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.camera import render
-from airsim_mapper.simserver.lidar import LidarModel
-from airsim_mapper.simserver.world import load_world
+from airsim_mapper.simserver.camera_model import RenderRequest
+from airsim_mapper.simserver.lidar_model import LidarModel
+from airsim_mapper.simserver.rendering import render
+from airsim_mapper.simserver.world_file import load_world
 
 WIDTH, HEIGHT, FOV = 640, 480, 90.0
 TYPE_NAMES = (
@@ -80,7 +81,7 @@ def main() -> None:
     world = load_world()
 
     def camera(types: list[int]) -> Callable[[int], object]:
-        return lambda i: render(world, *POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, types)
+        return lambda i: render(world, RenderRequest(*POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, types))
 
     results: dict[str, float] = {}
     for kind, name in enumerate(TYPE_NAMES):

@@ -2,33 +2,35 @@
 
 from __future__ import annotations
 
-from airsim_mapper.simserver import camera, lidar
+from airsim_mapper.simserver import camera_model, lidar_model, rendering
+from airsim_mapper.simserver.camera_model import RenderRequest
 from tools.bench import replay_server
 
 
 def test_the_replay_server_renders_in_its_own_process_with_the_cache(monkeypatch) -> None:
     seen: list[list[str]] = []
     monkeypatch.setattr(replay_server, "server_main", lambda argv: seen.append(list(argv)) or 0)
-    monkeypatch.setattr(camera, "render", camera.render)  # install_replay's patches, undone after the test
-    monkeypatch.setattr(lidar.LidarModel, "scan", lidar.LidarModel.scan)
+    # install_replay's patches, undone after the test
+    monkeypatch.setattr(rendering, "render", rendering.render)
+    monkeypatch.setattr(lidar_model.LidarModel, "scan", lidar_model.LidarModel.scan)
     assert replay_server.main(["--topicsport", "1"]) == 0
     # a render worker is a child process without the cache: 1080p would be ray cast for real (8 Hz)
     assert seen == [["--topicsport", "1", "--render-in-process"]]
-    assert camera.render.__name__ == "render" and camera.render.__qualname__.startswith("cached_render")
+    assert rendering.render.__name__ == "render" and rendering.render.__qualname__.startswith("cached_render")
 
 
-def test_the_render_cache_takes_camera_renders_arguments_and_renders_each_size_once(monkeypatch) -> None:
+def test_the_render_cache_takes_a_render_request_and_renders_each_size_once(monkeypatch) -> None:
     calls: list[tuple] = []
 
-    def real(world, position, orientation, width, height, fov, types, *more):
-        calls.append((width, height, more))
-        pixels = bytes(width * height * 3)
-        return {0: camera.RenderedImage("BGR", width, height, pixels)}
+    def real(world, request):
+        calls.append((request.width, request.height, request.max_depth_vis))
+        pixels = bytes(request.width * request.height * 3)
+        return {0: camera_model.RenderedImage("BGR", request.width, request.height, pixels)}
 
     render = replay_server.cached_render(real)
     for _ in range(3):  # as CameraStream calls it: with the depth-visualisation range after the types
-        frames = render(None, None, None, 1920, 1080, 90.0, [0], 100.0)
-    assert calls == [(320, 180, (100.0,))]  # once, at a sixth of the size (under 320x240)
+        frames = render(None, RenderRequest(None, None, 1920, 1080, 90.0, [0], 100.0))
+    assert calls == [(320, 180, 100.0)]  # once, at a sixth of the size (under 320x240)
     image = frames[0]
     assert (image.width, image.height, len(image.data)) == (1920, 1080, 1920 * 1080 * 3)
 

@@ -20,7 +20,7 @@ import numpy as np
 from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
-from airsim_mapper.simserver.camera import DEFAULT_MAX_DEPTH_VIS
+from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
@@ -43,7 +43,7 @@ DEFAULT_HOME = (47.641468, -122.140165, 122.0)
 EARTH_RADIUS_M = 6378137.0
 
 
-class SceneError(ValueError):
+class SceneSpecError(ValueError):
     """The scene configuration cannot be loaded; the message says what is wrong."""
 
 
@@ -149,13 +149,13 @@ def default_scene() -> SceneSpec:
 
 def _require(mapping: Mapping[str, Any], key: str, where: str) -> Any:
     if key not in mapping:
-        raise SceneError(f"{where} has no '{key}'")
+        raise SceneSpecError(f"{where} has no '{key}'")
     return mapping[key]
 
 
 def _number(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SceneError(f"{where} must be a finite number, got {value!r}")
+        raise SceneSpecError(f"{where} must be a finite number, got {value!r}")
     return float(value)
 
 
@@ -178,48 +178,48 @@ def _origin(origin: Any, where: str, home: tuple[float, float, float]) -> tuple[
     if origin is None:
         return np.zeros(3), IDENTITY_Q.copy()
     if not isinstance(origin, Mapping):
-        raise SceneError(f"{where} origin must be an object, got {origin!r}")
+        raise SceneSpecError(f"{where} origin must be an object, got {origin!r}")
     try:
         if "geo-point" in origin:
             parts = str(origin["geo-point"]).split()
             if len(parts) != 3:
-                raise SceneError(f"{where} origin 'geo-point' must hold three numbers")
+                raise SceneSpecError(f"{where} origin 'geo-point' must hold three numbers")
             position = geo_to_ned(tuple(float(p) for p in parts), home)  # type: ignore[arg-type]
             _, orientation = parse_origin({k: v for k, v in origin.items() if k != "geo-point"})
             return position, orientation
         return parse_origin(origin)
     except (OriginError, ValueError) as exc:
-        if isinstance(exc, SceneError):
+        if isinstance(exc, SceneSpecError):
             raise
-        raise SceneError(f"{where}: {exc}") from exc
+        raise SceneSpecError(f"{where}: {exc}") from exc
 
 
 def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ...]:
     settings = sensor.get("capture-settings", [])
     if not isinstance(settings, list):
-        raise SceneError(f"{where} 'capture-settings' must be a list")
+        raise SceneSpecError(f"{where} 'capture-settings' must be a list")
     captures = []
     for item in settings:
         if not isinstance(item, Mapping):
-            raise SceneError(f"{where} capture setting must be an object, got {item!r}")
+            raise SceneSpecError(f"{where} capture setting must be an object, got {item!r}")
         image_type = item.get("image-type")
         if (
             isinstance(image_type, bool)
             or not isinstance(image_type, int)
             or image_type not in IMAGE_TYPE_NAMES
         ):
-            raise SceneError(f"{where} has an invalid 'image-type' {image_type!r} (expected 0..6)")
+            raise SceneSpecError(f"{where} has an invalid 'image-type' {image_type!r} (expected 0..6)")
         here = f"{where} image-type {image_type}"
         width = int(_number(item.get("width", 256), f"{here} 'width'"))
         height = int(_number(item.get("height", 144), f"{here} 'height'"))
         if width <= 0 or height <= 0:
-            raise SceneError(f"{here} must have a positive width and height, got {width}x{height}")
+            raise SceneSpecError(f"{here} must have a positive width and height, got {width}x{height}")
         fov = _number(item.get("fov-degrees", 90.0), f"{here} 'fov-degrees'")
         if not 0.0 < fov < 180.0:
-            raise SceneError(f"{here} 'fov-degrees' must be in (0, 180), got {fov}")
+            raise SceneSpecError(f"{here} 'fov-degrees' must be in (0, 180), got {fov}")
         max_depth = _number(item.get("max-depth-meters", DEFAULT_MAX_DEPTH_VIS), f"{here} 'max-depth-meters'")
         if max_depth <= 0.0:
-            raise SceneError(f"{here} 'max-depth-meters' must be positive, got {max_depth}")
+            raise SceneSpecError(f"{here} 'max-depth-meters' must be positive, got {max_depth}")
         captures.append(
             CaptureSetting(
                 image_type,
@@ -238,12 +238,12 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
 
 def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> SensorSpec | None:
     if not isinstance(sensor, Mapping):
-        raise SceneError(f"{where} sensor must be an object, got {sensor!r}")
+        raise SceneSpecError(f"{where} sensor must be an object, got {sensor!r}")
     sensor_id = _require(sensor, "id", f"{where} sensor")
     sensor_type = _require(sensor, "type", f"{where} sensor '{sensor_id}'")
     here = f"{where} sensor '{sensor_id}'"
     if sensor_type not in SENSOR_TYPES:
-        raise SceneError(f"{here} has unknown type '{sensor_type}'")
+        raise SceneSpecError(f"{here} has unknown type '{sensor_type}'")
     if not sensor.get("enabled", False):
         return None
     position, orientation = _origin(sensor.get("origin"), here, home)
@@ -251,16 +251,16 @@ def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> Sensor
     if "report-frequency" in sensor:
         frequency = _number(sensor["report-frequency"], f"{here} 'report-frequency'")
         if frequency < 0:
-            raise SceneError(f"{here} 'report-frequency' must be at least 0, got {frequency:g}")
+            raise SceneSpecError(f"{here} 'report-frequency' must be at least 0, got {frequency:g}")
     interval = _number(sensor.get("capture-interval", 5.0), f"{here} 'capture-interval'")
     if interval <= 0:
-        raise SceneError(f"{here} 'capture-interval' must be positive, got {interval}")
+        raise SceneSpecError(f"{here} 'capture-interval' must be positive, got {interval}")
     annotation = None
     if sensor_type == "camera":
         try:
             annotation = AnnotationSettings.from_config(sensor)
         except AnnotationError as exc:
-            raise SceneError(f"{here}: {exc}") from exc
+            raise SceneSpecError(f"{here}: {exc}") from exc
     return SensorSpec(
         str(sensor_id), sensor_type, sensor, position, orientation, captures, interval, annotation
     )
@@ -269,23 +269,23 @@ def _sensor(sensor: Any, where: str, home: tuple[float, float, float]) -> Sensor
 def _robot(actor: Mapping[str, Any], index: int, home: tuple[float, float, float]) -> RobotSpec:
     name = _require(actor, "name", f"actor #{index}")
     if not isinstance(name, str) or not name:
-        raise SceneError(f"actor #{index} 'name' must be a non-empty string")
+        raise SceneSpecError(f"actor #{index} 'name' must be a non-empty string")
     where = f"robot '{name}'"
     config = _require(actor, "robot-config", where)
     if not isinstance(config, Mapping):
-        raise SceneError(
+        raise SceneSpecError(
             f"{where} 'robot-config' must be the inlined robot config object, got {type(config).__name__} "
             "(the client inlines robot files before LoadScene)"
         )
     position, orientation = _origin(_require(actor, "origin", where), where, home)
     sensors_cfg = config.get("sensors", [])
     if not isinstance(sensors_cfg, list):
-        raise SceneError(f"{where} 'sensors' must be a list")
+        raise SceneSpecError(f"{where} 'sensors' must be a list")
     sensors = [s for s in (_sensor(item, where, home) for item in sensors_cfg) if s is not None]
     ids = [s.id for s in sensors]
     duplicates = sorted({i for i in ids if ids.count(i) > 1})
     if duplicates:
-        raise SceneError(f"{where} has duplicate sensor ids: {', '.join(duplicates)}")
+        raise SceneSpecError(f"{where} has duplicate sensor ids: {', '.join(duplicates)}")
     return RobotSpec(name, position, orientation, config, tuple(sensors))
 
 
@@ -293,13 +293,13 @@ def _clock(clock: Any) -> ClockSpec:
     if clock is None:
         return ClockSpec()
     if not isinstance(clock, Mapping):
-        raise SceneError(f"scene 'clock' must be an object, got {clock!r}")
+        raise SceneSpecError(f"scene 'clock' must be an object, got {clock!r}")
     kind = clock.get("type", "steppable")
     if kind not in CLOCK_TYPES:
-        raise SceneError(f"scene clock type '{kind}' is not supported (expected steppable or real-time)")
+        raise SceneSpecError(f"scene clock type '{kind}' is not supported (expected steppable or real-time)")
     step_ns = int(_number(clock.get("step-ns", 3_000_000), "scene clock 'step-ns'"))
     if step_ns <= 0:
-        raise SceneError(f"scene clock 'step-ns' must be positive, got {step_ns}")
+        raise SceneSpecError(f"scene clock 'step-ns' must be positive, got {step_ns}")
     return ClockSpec(kind, step_ns, bool(clock.get("pause-on-start", False)))
 
 
@@ -307,7 +307,7 @@ def _home(home: Any) -> tuple[float, float, float]:
     if not home:
         return DEFAULT_HOME
     if not isinstance(home, Mapping):
-        raise SceneError(f"scene 'home-geo-point' must be an object, got {home!r}")
+        raise SceneSpecError(f"scene 'home-geo-point' must be an object, got {home!r}")
     return tuple(  # type: ignore[return-value]
         _number(home.get(key, default), f"scene home-geo-point '{key}'")
         for key, default in zip(("latitude", "longitude", "altitude"), DEFAULT_HOME)
@@ -315,40 +315,42 @@ def _home(home: Any) -> tuple[float, float, float]:
 
 
 def parse_scene(text: str | bytes) -> SceneSpec:
-    """Validate the scene JSON sent with `/Sim/LoadScene`; raises SceneError naming the problem."""
+    """Validate the scene JSON sent with `/Sim/LoadScene`; raises SceneSpecError naming the problem."""
     try:
         config = json.loads(text)
     except (ValueError, TypeError) as exc:
-        raise SceneError(f"scene_config is not valid JSON: {exc}") from exc
+        raise SceneSpecError(f"scene_config is not valid JSON: {exc}") from exc
     if not isinstance(config, Mapping):
-        raise SceneError(f"scene_config must be a JSON object, got {type(config).__name__}")
+        raise SceneSpecError(f"scene_config must be a JSON object, got {type(config).__name__}")
     scene_id = _require(config, "id", "scene config")
     if not isinstance(scene_id, str) or not scene_id or "/" in scene_id:
-        raise SceneError(f"scene 'id' must be a non-empty string without '/', got {scene_id!r}")
+        raise SceneSpecError(f"scene 'id' must be a non-empty string without '/', got {scene_id!r}")
     actors = config.get("actors", [])
     if not isinstance(actors, list):
-        raise SceneError("scene 'actors' must be a list")
+        raise SceneSpecError("scene 'actors' must be a list")
     home = _home(config.get("home-geo-point"))
     robots = []
     for index, actor in enumerate(actors):
         if not isinstance(actor, Mapping):
-            raise SceneError(f"actor #{index} must be an object")
+            raise SceneSpecError(f"actor #{index} must be an object")
         if actor.get("type") == "robot":
             robots.append(_robot(actor, index, home))
     names = [r.name for r in robots]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
-        raise SceneError(f"scene has duplicate robot names: {', '.join(duplicates)}")
+        raise SceneSpecError(f"scene has duplicate robot names: {', '.join(duplicates)}")
     env_actors = config.get("environment-actors", []) or []
     if not isinstance(env_actors, list):
-        raise SceneError("scene 'environment-actors' must be a list")
+        raise SceneSpecError("scene 'environment-actors' must be a list")
     envs = tuple(_env_actor(a, i, home) for i, a in enumerate(env_actors))
     return SceneSpec(scene_id, tuple(robots), _clock(config.get("clock")), home, envs)
 
 
 def _env_actor(actor: Any, index: int, home: tuple[float, float, float]) -> EnvActorSpec:
     if not isinstance(actor, Mapping) or actor.get("type") not in ENV_ACTOR_TYPES:
-        raise SceneError(f"environment actor #{index} must be an object of type {', '.join(ENV_ACTOR_TYPES)}")
+        raise SceneSpecError(
+            f"environment actor #{index} must be an object of type {', '.join(ENV_ACTOR_TYPES)}"
+        )
     name = _require(actor, "name", f"environment actor #{index}")
     position, orientation = _origin(actor.get("origin"), f"environment actor '{name}'", home)
     config = actor.get("env-actor-config", {})

@@ -1,12 +1,13 @@
 """Sensor streams: when each sensor of a robot renders or measures, and where its messages go.
 
-Cameras render on the camera thread (through the render worker, which a busy machine slows first), lidars
-and radars scan on the scan thread, so a slow render never holds a scan back; instruments (IMU, GPS, ...)
-and rotor info are cheap and run on the simulation thread. Cameras render only while someone subscribes
-(or a GetImages call waits). The other sensors sample on their schedule whether or not anyone listens, as
-the real ones do: an unheard sample is offered to the topic hub, made only if a subscriber comes before
-the next one, so a new subscriber always gets the latest sample.
-The sensor modules (camera, lidar, radar, instruments) are pure numpy; this module only schedules them.
+Cameras (`camera_stream.py`) render on the camera thread (through the render worker, which a busy machine
+slows first), lidars and radars scan on the scan thread, so a slow render never holds a scan back;
+instruments (IMU, GPS, ...) and rotor info are cheap and run on the simulation thread. Cameras render only
+while someone subscribes (or a GetImages call waits). The other sensors sample on their schedule whether or
+not anyone listens, as the real ones do: an unheard sample is offered to the topic hub, made only if a
+subscriber comes before the next one, so a new subscriber always gets the latest sample.
+The sensor models (`camera_model` and the renderers, `lidar_model`, `radar_model`, `instrument_models`)
+are pure numpy (or OpenGL); this module only schedules them.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ import functools
 import logging
 import math
 import threading
-import time
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -23,29 +23,22 @@ import numpy as np
 
 from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
 from airsim_mapper.simserver import (
-    annotations,
-    camera,
-    image_encoding,
-    instruments,
-    lidar,
+    instrument_models,
+    lidar_model,
     messages,
-    protocol,
-    radar,
+    radar_model,
 )
 from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.motion import Body, Kinematic
-from airsim_mapper.simserver.scene import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
-from airsim_mapper.simserver.services import ServiceError
+from airsim_mapper.simserver.scene_spec import SensorSpec
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 
-LOG = logging.getLogger("airsim_mapper.simserver.streams")
+LOG = logging.getLogger("airsim_mapper.simserver.sensor_streams")
 
-GET_IMAGES_TIMEOUT_S = 5.0
 # Between reports a lidar scans segments of at least this much sim time: one per 3 ms tick cost the server
 # about a tenth of a core in numpy call overhead, and the report carries the same points either way.
 LIDAR_MIN_SEGMENT_NS = 20_000_000
-Render = Callable[..., dict[int, camera.RenderedImage]]  # camera.render's arguments after the world
 
 
 def mount_pose(
@@ -117,160 +110,6 @@ def report_frequency(sensor: SensorSpec) -> float | None:
     return None if value is None else float(value)
 
 
-class CameraStream:
-    """One camera: renders the capture-enabled types that are subscribed or requested by GetImages.
-
-    `render` has the signature of `camera.render` without the world (a RenderWorker's, in the server);
-    None renders in this process.
-    """
-
-    def __init__(
-        self,
-        sensor: SensorSpec,
-        prefix: str,
-        body: Body,
-        world: World,
-        hub: TopicHub,
-        render: Render | None = None,
-    ) -> None:
-        self.sensor = sensor
-        self.prefix = prefix
-        self.body = body
-        self.world = world
-        self.hub = hub
-        self.render: Render = render or functools.partial(camera.render, world)
-        self.captures = {c.image_type: c for c in sensor.enabled_captures()}
-        for image_type, capture in self.captures.items():
-            problem = image_encoding.unsupported_combination(
-                image_type, capture.compress, capture.pixels_as_float
-            )
-            if problem:
-                LOG.warning("camera %s image-type %d: %s", prefix, image_type, problem)
-        self.fov = {t: c.fov_deg for t, c in self.captures.items()}
-        self.offset_position = np.array(sensor.position, dtype=float)
-        self.offset_orientation = np.array(sensor.orientation, dtype=float)
-        gimbal = sensor.config.get("gimbal")
-        self.gimbal = dict(gimbal) if isinstance(gimbal, dict) else None
-        self.schedule = Schedule(int(sensor.capture_interval * 1e9))
-        self._cond = threading.Condition()
-        self._requests: dict[int, int] = {}  # image type -> number of waiting GetImages calls
-        self._request_time_ns = -1
-        self._latest: dict[int, dict[str, Any]] = {}
-        self._latest_ns = -1
-
-    def topic(self, image_type: int) -> str:
-        return f"{self.prefix}/{IMAGE_TYPE_NAMES[image_type]}"
-
-    def publish_infos(self) -> None:
-        """CameraInfo once at scene start (cached; type 5 lands on its image topic, the real quirk)."""
-        for image_type, capture in self.captures.items():
-            info = camera.camera_info_message(capture.width, capture.height, capture.fov_deg)
-            self.hub.publish(info_topic_path(self.prefix, image_type), info)
-
-    def set_pose(self, position: np.ndarray, orientation: np.ndarray) -> None:
-        with self._cond:
-            self.offset_position, self.offset_orientation = position, orientation
-
-    def reset_pose(self) -> None:
-        self.set_pose(
-            np.array(self.sensor.position, dtype=float), np.array(self.sensor.orientation, dtype=float)
-        )
-
-    def world_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        with self._cond:
-            offset = (self.offset_position.copy(), self.offset_orientation.copy())
-        return mount_pose(self.body.snapshot(), *offset, self.gimbal)
-
-    def _wanted(self) -> list[int]:
-        with self._cond:
-            requested = {t for t, n in self._requests.items() if n > 0}
-        return sorted(t for t in self.captures if self.hub.is_subscribed(self.topic(t)) or t in requested)
-
-    def step(self, now_ns: int) -> bool:
-        """Capture if due and wanted; True if it rendered."""
-        with self._cond:
-            urgent = self._request_time_ns > self._latest_ns
-        if not (self.schedule.due(now_ns) or urgent):
-            return False
-        wanted = self._wanted()
-        if not wanted:
-            return False
-        self.capture(now_ns, wanted)
-        return True
-
-    def capture(self, now_ns: int, image_types: list[int]) -> None:
-        position, orientation = self.world_pose()
-        groups: dict[tuple[int, int, float], list[int]] = {}
-        for image_type in image_types:
-            capture = self.captures[image_type]
-            groups.setdefault((capture.width, capture.height, self.fov[image_type]), []).append(image_type)
-        latest: dict[int, dict[str, Any]] = {}
-        boxes = self.annotations(position, orientation)
-        for (width, height, fov), types in groups.items():
-            vis = self.captures.get(camera.DEPTH_VIS)
-            max_depth = vis.max_depth_m if vis else camera.DEFAULT_MAX_DEPTH_VIS
-            rendered = self.render(position, orientation, width, height, fov, types, max_depth)
-            for image_type, img in rendered.items():
-                setting = self.captures[image_type]
-                wire = image_encoding.wire_image(
-                    image_type,
-                    img.encoding,
-                    img.data,
-                    img.width,
-                    img.height,
-                    setting.compress,
-                    setting.pixels_as_float,
-                )
-                message = messages.image(
-                    now_ns, wire.encoding, img.width, img.height, wire.data, position, orientation, boxes
-                )
-                latest[image_type] = message
-                path = self.topic(image_type)
-                if self.hub.is_subscribed(path):
-                    self.hub.publish(path, message)
-        with self._cond:
-            self._latest.update(latest)
-            self._latest_ns = now_ns
-            self._cond.notify_all()
-
-    def annotations(self, position: np.ndarray, orientation: np.ndarray) -> list[dict[str, Any]]:
-        """The capture's bounding boxes (annotation-settings), in the scene capture's image geometry."""
-        settings = self.sensor.annotation
-        if settings is None:
-            return []
-        scene = next((c for c in self.sensor.captures if c.image_type == camera.SCENE), None)
-        width, height = (scene.width, scene.height) if scene else annotations.DEFAULT_SIZE
-        fov = self.fov.get(camera.SCENE, scene.fov_deg if scene else annotations.DEFAULT_FOV_DEG)
-        return annotations.annotate(self.world, settings, position, orientation, width, height, fov)
-
-    def get_images(self, image_types: list[int], now_ns: Callable[[], int]) -> dict[str, Any]:
-        """GetImages: wait for a capture at or after the request's sim time; JSON form (data as a list)."""
-        types = [int(t) for t in image_types if int(t) in self.captures]
-        if not types:
-            return {}
-        t_request = now_ns()
-        deadline = time.monotonic() + GET_IMAGES_TIMEOUT_S
-        with self._cond:
-            for t in types:
-                self._requests[t] = self._requests.get(t, 0) + 1
-            self._request_time_ns = max(self._request_time_ns, t_request)
-            try:
-                while not (self._latest_ns >= t_request and all(t in self._latest for t in types)):
-                    remaining = deadline - time.monotonic()
-                    if remaining <= 0:
-                        raise ServiceError("GetImages() Timeout waiting for new captured_images.")
-                    self._cond.wait(remaining)
-                    if self._latest_ns >= t_request and not all(t in self._latest for t in types):
-                        self._request_time_ns = max(self._request_time_ns, self._latest_ns + 1)
-                result = {str(t): dict(self._latest[t]) for t in types}
-            finally:
-                for t in types:
-                    self._requests[t] -= 1
-        for entry in result.values():
-            entry["data"] = protocol.uint8_list(entry["data"])
-        return result
-
-
 class LidarStream:
     """A lidar: each physics tick scans the segment of its pattern since the previous tick (from the pose at
     that tick, points in the sensor frame of that tick), and a report carries every segment since the
@@ -295,7 +134,7 @@ class LidarStream:
     ) -> None:
         self.path = f"{prefix}/lidar"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
-        self.model = lidar.LidarModel.from_config(dict(sensor.config))
+        self.model = lidar_model.LidarModel.from_config(dict(sensor.config))
         self.step_ns = max(1, int(step_ns))
         self.timer = ReportTimer(report_frequency(sensor))
         self.report_span_ns = max(self.step_ns, self.timer.period_ns)  # the sim time one report covers
@@ -361,7 +200,7 @@ class RadarStream:
         self.detections_path = f"{prefix}/radar_detections"
         self.tracks_path = f"{prefix}/radar_tracks"
         self.sensor, self.body, self.world, self.hub = sensor, body, world, hub
-        self.model = radar.RadarModel.from_config(dict(sensor.config))
+        self.model = radar_model.RadarModel.from_config(dict(sensor.config))
         self.detect_schedule = Schedule(int(float(sensor.config.get("detection-interval", 0.1)) * 1e9))
         self.track_schedule = Schedule(int(float(sensor.config.get("track-interval", 0.2)) * 1e9))
 
@@ -391,9 +230,9 @@ class RadarStream:
         return worked
 
 
-def ground_truth(body: Body) -> instruments.Kinematics:
+def ground_truth(body: Body) -> instrument_models.Kinematics:
     """The body's state now, as the instrument models take it."""
-    return instruments.Kinematics(**vars(body.snapshot()))
+    return instrument_models.Kinematics(**vars(body.snapshot()))
 
 
 class InstrumentStream:
@@ -428,28 +267,28 @@ class InstrumentStream:
         self.timer = ReportTimer(report_frequency(sensor) if sensor.type == "distance-sensor" else None)
         self.battery = BatteryState.from_config(sensor.config, start_ns) if sensor.type == "battery" else None
 
-    def message(self, now_ns: int, kin: instruments.Kinematics | None = None) -> dict[str, Any]:
+    def message(self, now_ns: int, kin: instrument_models.Kinematics | None = None) -> dict[str, Any]:
         """This instrument's message at `now_ns`, from `kin` (read from the body if not given)."""
         kin = kin if kin is not None else ground_truth(self.body)
         cfg = self.config
         kind = self.sensor.type
         if kind == "imu":
-            return instruments.imu_message(kin, cfg, now_ns)
+            return instrument_models.imu_message(kin, cfg, now_ns)
         if kind == "gps":
-            return instruments.gps_message(kin, self.home_geo, cfg, now_ns)
+            return instrument_models.gps_message(kin, self.home_geo, cfg, now_ns)
         if kind == "barometer":
-            return instruments.barometer_message(kin, self.home_geo, cfg, now_ns)
+            return instrument_models.barometer_message(kin, self.home_geo, cfg, now_ns)
         if kind == "magnetometer":
-            return instruments.magnetometer_message(kin, cfg, now_ns)
+            return instrument_models.magnetometer_message(kin, cfg, now_ns)
         if kind == "distance-sensor":
-            return instruments.distance_message(self.world, kin, cfg, now_ns)
+            return instrument_models.distance_message(self.world, kin, cfg, now_ns)
         if self.battery is not None:
             return self.battery.message(now_ns)
-        return instruments.airspeed_message(kin, cfg, now_ns)
+        return instrument_models.airspeed_message(kin, cfg, now_ns)
 
-    def step(self, now_ns: int, state: Callable[[], instruments.Kinematics] | None = None) -> None:
+    def step(self, now_ns: int, state: Callable[[], instrument_models.Kinematics] | None = None) -> None:
         """Publish if due (offered: made only if someone listens); `state` gives the tick's ground truth,
-        shared by a robot's instruments."""
+        shared by a robot's instrument_models."""
         if self.timer.due(now_ns):
             kin = state() if state is not None else ground_truth(self.body)
             self.hub.offer(self.path, functools.partial(self.message, now_ns, kin))
