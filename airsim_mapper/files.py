@@ -16,6 +16,8 @@ import stat
 import threading
 from pathlib import Path
 
+from airsim_mapper.errors import AirsimMapperError
+
 MAX_CONFIG_BYTES = 16 * 1024 * 1024
 READ_TIMEOUT_S = 10.0
 CHUNK = 1 << 20
@@ -28,7 +30,7 @@ KINDS = (
 )
 
 
-class ConfigFileError(Exception):
+class ConfigFileError(AirsimMapperError):
     """A config file that cannot be used as one; str() names the file (and line and column when known).
 
     `unreadable` is true when the file could not be read at all (missing, no permission, a read that never

@@ -12,10 +12,12 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.errors import AirsimMapperError
+
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 
 
-class OriginError(ValueError):
+class OriginError(AirsimMapperError, ValueError):
     """A config `origin` block could not be parsed."""
 
 

@@ -21,13 +21,15 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.errors import AirsimMapperError
+
 CONVENTIONS = ("frd", "flu")
 RETURN_FIELDS = ("range", "azimuth", "elevation", "doppler_velocity", "amplitude")
 WEAK_RGBA = (1.0, 0.9, 0.1, 1.0)  # yellow
 STRONG_RGBA = (1.0, 0.1, 0.1, 1.0)  # red
 
 
-class RadarMarkerError(ValueError):
+class RadarMarkerError(AirsimMapperError, ValueError):
     """A scan or an option cannot be turned into markers."""
 
 

@@ -2,8 +2,9 @@
 
 The merging and the JSON-schema validation are the client's own (`projectairsim.utils.
 load_scene_config_as_dict`, protocol.md 6.1); this module wraps it so that files outside the config directory
-are refused and every failure is a SceneError naming the file, and it lists the scene's robots, sensors and
-capture settings as plain frozen values. `Scene.config` is the merged dict the engine sends to the simulator.
+are refused and every failure is a SceneConfigError naming the file, and it lists the scene's robots,
+sensors and capture settings as plain frozen values. `Scene.config` is the merged dict the engine sends to
+the simulator.
 """
 
 from __future__ import annotations
@@ -18,15 +19,15 @@ from functools import cache
 from pathlib import Path, PurePath
 from typing import Any
 
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.files import ConfigFileError, read_config_text
-from airsim_mapper.mapping.errors import ConfigError
 
 _CLIENT_READS = threading.Lock()
 SCENE_SCHEMA = "schema/scene_config_schema.jsonc"
 ROBOT_SCHEMA = "schema/robot_config_schema.jsonc"
 
 
-class SceneError(ConfigError):
+class SceneConfigError(ConfigError):
     """The scene or a robot config cannot be read, lies outside the config directory, or is invalid."""
 
 
@@ -99,16 +100,18 @@ class Scene:
 def contained(root: Path, name: str, what: str) -> Path:
     """`root / name` if it stays inside `root` (no absolute path, no '..', no symlink escaping it)."""
     if not isinstance(name, str) or not name:
-        raise SceneError.single(str(root), f"{what} must be a non-empty file name, got {name!r}")
+        raise SceneConfigError.single(str(root), f"{what} must be a non-empty file name, got {name!r}")
     pure = PurePath(name)
     if pure.is_absolute():
-        raise SceneError.single(name, f"{what} must be relative to the config directory {root}")
+        raise SceneConfigError.single(name, f"{what} must be relative to the config directory {root}")
     if ".." in pure.parts:
-        raise SceneError.single(name, f"{what} may not leave the config directory {root} ('..')")
+        raise SceneConfigError.single(name, f"{what} may not leave the config directory {root} ('..')")
     path = root / pure
     resolved = path.resolve()
     if not resolved.is_relative_to(root):
-        raise SceneError.single(str(path), f"{what} resolves outside the config directory {root} (symlink)")
+        raise SceneConfigError.single(
+            str(path), f"{what} resolves outside the config directory {root} (symlink)"
+        )
     return path
 
 
@@ -118,14 +121,14 @@ def _parse(path: Path, what: str, unreadable: bool) -> Any:
     try:
         text = read_config_text(path)
     except ConfigFileError as err:
-        raise SceneError.single(
+        raise SceneConfigError.single(
             str(path), err.about(what), err.line, err.column, unreadable=unreadable and err.unreadable
         ) from None
     try:
         return commentjson.loads(text)
     except Exception as err:  # commentjson raises lark errors, ValueError, RecursionError...
         first = str(err).splitlines()[0] if str(err) else type(err).__name__
-        raise SceneError.single(str(path), f"invalid JSON in the {what}: {first}") from None
+        raise SceneConfigError.single(str(path), f"invalid JSON in the {what}: {first}") from None
 
 
 def _schema_message(err: Any) -> str:
@@ -192,7 +195,7 @@ def _checked_client_reads() -> Iterator[None]:
         try:
             return io.StringIO(read_config_text(path))
         except ConfigFileError as err:
-            raise SceneError.single(err.file, err.about("config file"), err.line, err.column) from None
+            raise SceneConfigError.single(err.file, err.about("config file"), err.line, err.column) from None
 
     with _CLIENT_READS:  # one reader at a time owns the patch
         client_utils.open = checked_open
@@ -210,18 +213,22 @@ def _precheck(root: Path, path: Path) -> dict[str, Any]:
     validator = jsonschema.Draft4Validator(_schema(SCENE_SCHEMA))
     errors = sorted(validator.iter_errors(data), key=lambda e: [str(p) for p in e.path])
     if errors:
-        raise SceneError.single(str(path), "does not match the scene schema: " + _schema_message(errors[0]))
+        raise SceneConfigError.single(
+            str(path), "does not match the scene schema: " + _schema_message(errors[0])
+        )
     for actor in data.get("actors", []):
         if actor.get("type") == "robot":
             for name in _robot_config_names(actor):
                 config = contained(root, name, f"robot-config of actor '{actor['name']}'")
                 if not config.exists():
-                    raise SceneError.single(str(config), f"robot config of actor '{actor['name']}' not found")
+                    raise SceneConfigError.single(
+                        str(config), f"robot config of actor '{actor['name']}' not found"
+                    )
                 _parse(config, f"robot config of actor '{actor['name']}'", False)
     return data
 
 
-def _diagnose_robot(root: Path, data: Mapping[str, Any], err: Exception) -> SceneError:
+def _diagnose_robot(root: Path, data: Mapping[str, Any], err: Exception) -> SceneConfigError:
     """Name the robot config file (or actor) at fault after the client's loader failed."""
     import jsonschema
     from projectairsim.utils import merge_dicts
@@ -235,20 +242,24 @@ def _diagnose_robot(root: Path, data: Mapping[str, Any], err: Exception) -> Scen
         for name in names:
             part = _parse(root / name, f"robot config of actor '{actor['name']}'", False)
             if not isinstance(part, dict):
-                return SceneError.single(str(root / name), "a robot config must be a JSON object")
+                return SceneConfigError.single(str(root / name), "a robot config must be a JSON object")
             merged = merge_dicts(merged, part)
         errors = sorted(validator.iter_errors(merged), key=lambda e: [str(p) for p in e.path])
         if errors:
             files = ", ".join(str(root / name) for name in names)
-            return SceneError.single(files, "does not match the robot schema: " + _schema_message(errors[0]))
-    return SceneError.single(str(root), f"the client's loader failed: {type(err).__name__}: {err}")
+            return SceneConfigError.single(
+                files, "does not match the robot schema: " + _schema_message(errors[0])
+            )
+    return SceneConfigError.single(str(root), f"the client's loader failed: {type(err).__name__}: {err}")
 
 
 def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
-    """Read `scene_file` from the `simconfigpath` directory with the client's loader; raise SceneError."""
+    """Read `scene_file` from the `simconfigpath` directory with the client's loader, or SceneConfigError."""
     root = Path(simconfigpath).resolve()
     if not root.is_dir():
-        raise SceneError.single(str(simconfigpath), "the config directory does not exist", unreadable=True)
+        raise SceneConfigError.single(
+            str(simconfigpath), "the config directory does not exist", unreadable=True
+        )
     path = contained(root, scene_file, "the scene file")
     raw = _precheck(root, path)
     from projectairsim.utils import load_scene_config_as_dict
@@ -256,7 +267,7 @@ def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
     try:
         with _quiet_client_log(), _fast_client_schemas(), _checked_client_reads():
             data, _ = load_scene_config_as_dict(str(PurePath(scene_file)), str(root) + "/")
-    except SceneError:
+    except SceneConfigError:
         raise
     except Exception as err:  # the client raises jsonschema, lark, OS and type errors
         raise _diagnose_robot(root, raw, err) from None
@@ -267,9 +278,11 @@ def scene_from_config(config: Mapping[str, Any], scene_file: str, simconfigpath:
     """A Scene from an already merged scene dict (e.g. `World.get_configuration()` of a mission script)."""
     root = Path(simconfigpath).resolve()
     if not isinstance(config, Mapping) or not isinstance(config.get("id"), str):
-        raise SceneError.single(scene_file or str(root), "the scene configuration has no string 'id'")
+        raise SceneConfigError.single(scene_file or str(root), "the scene configuration has no string 'id'")
     if not isinstance(config.get("actors", []), list):
-        raise SceneError.single(scene_file or str(root), "the scene configuration's 'actors' is not a list")
+        raise SceneConfigError.single(
+            scene_file or str(root), "the scene configuration's 'actors' is not a list"
+        )
     return _scene(dict(config), scene_file, root / (scene_file or "scene.jsonc"))
 
 
@@ -280,11 +293,15 @@ def _scene(data: dict[str, Any], scene_file: str, path: Path) -> Scene:
             continue
         config = actor.get("robot-config") or {}
         if not isinstance(config, Mapping):
-            raise SceneError.single(str(path), f"actor '{actor.get('name')}': robot-config is not inlined")
+            raise SceneConfigError.single(
+                str(path), f"actor '{actor.get('name')}': robot-config is not inlined"
+            )
         sensors = []
         for entry in config.get("sensors", []) or []:
             if not isinstance(entry, Mapping) or not isinstance(entry.get("id"), str):
-                raise SceneError.single(str(path), f"actor '{actor['name']}': a sensor has no string 'id'")
+                raise SceneConfigError.single(
+                    str(path), f"actor '{actor['name']}': a sensor has no string 'id'"
+                )
             kind = str(entry.get("type", "")).replace("-", "_")
             sensors.append(Sensor(entry["id"], kind, entry.get("enabled", True) is not False, entry))
         header = {key: value for key, value in actor.items() if key != "robot-config"}

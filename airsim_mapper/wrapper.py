@@ -27,17 +27,19 @@ from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
 from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
+from airsim_mapper.errors import AirsimMapperError
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.names import resolve_namespace
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import Scene, scene_from_config
 
 log = logging.getLogger("rosout.airsim_mapper")
 
 
-class WrapperError(RuntimeError):
+class WrapperError(AirsimMapperError, RuntimeError):
     """The wrapper cannot do what was asked (the message says why)."""
 
 
@@ -76,8 +78,8 @@ class ProjectAirSimWrapper:
         client: Any = None,
         *,
         address: str = "127.0.0.1",
-        topicsport: int = 8989,
-        servicesport: int = 8990,
+        topicsport: int = TOPICS_PORT,
+        servicesport: int = SERVICES_PORT,
         sim_config_path: str | Path = "sim_config/",
         mapping: Mapping | str | Path = DEFAULT_MAPPING,
         scene: str | None = None,

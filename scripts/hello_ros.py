@@ -21,6 +21,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # run from a checkout without install
 
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT  # noqa: E402
+
 log = logging.getLogger("rosout.hello_ros")
 
 
@@ -31,8 +33,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--address", default="127.0.0.1")
     parser.add_argument("--nodename", default=None)
     parser.add_argument("--simconfigpath", default=str(ROOT / "sim_config"))
-    parser.add_argument("--servicesport", type=int, default=8990)
-    parser.add_argument("--topicsport", type=int, default=8989)
+    parser.add_argument("--servicesport", type=int, default=SERVICES_PORT)
+    parser.add_argument("--topicsport", type=int, default=TOPICS_PORT)
     parser.add_argument("--mapping", default="default", help="mapping YAML file or shipped mapping name")
     parser.add_argument("--scene", default="scene_drone_sensors.jsonc")
     parser.add_argument("--robot", default="Drone1")

@@ -17,7 +17,17 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "airsim_mapper"
-LEAVES = frozenset({"airsim_mapper.geometry", "airsim_mapper.image_types", "airsim_mapper.tuning"})
+LEAVES = frozenset(
+    {
+        "airsim_mapper.errors",
+        "airsim_mapper.geometry",
+        "airsim_mapper.image_types",
+        "airsim_mapper.logs",
+        "airsim_mapper.ports",
+        "airsim_mapper.ros_types",
+        "airsim_mapper.tuning",
+    }
+)
 ROS_LIBRARIES = frozenset({"rospy", "genpy", "roslib", "rosgraph", "tf2_ros", "tf2_py", "message_filters"})
 
 

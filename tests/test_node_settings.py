@@ -1,13 +1,22 @@
-"""The node's settings: command line, then private parameter, then default; --namespace as a ROS name."""
+"""The node's settings: command line, then private parameter, then default; --namespace as a ROS name;
+the launch files agree with the node's SETTINGS and the default ports."""
 
 from __future__ import annotations
 
+import os
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
 
-from airsim_mapper.cli.node import SettingError, parse_args, resolve_settings
+from airsim_mapper.cli.node import SETTINGS, SettingError, given_settings, parse_args, resolve_settings
 from airsim_mapper.mapping.names import resolve_namespace
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+
+LAUNCH = Path(__file__).resolve().parent.parent / "launch"
+SIM_CONFIG = Path(__file__).resolve().parent.parent / "sim_config"
+# launch defaults that differ from the node's on purpose: roslaunch finds the package's own sim_config
+LAUNCH_OWN_DEFAULTS = {"simconfigpath": "$(find projectairsim_ros)/sim_config"}
 
 
 def params(**values):
@@ -18,19 +27,7 @@ def params(**values):
 
 
 def given(argv: list[str]) -> dict:
-    args = parse_args(argv)
-    return {
-        name: getattr(args, name)
-        for name in (
-            "address",
-            "topicsport",
-            "servicesport",
-            "simconfigpath",
-            "mapping",
-            "scene",
-            "namespace",
-        )
-    }
+    return given_settings(parse_args(argv))
 
 
 def test_the_command_line_wins_then_the_parameter_then_the_default(tmp_path, monkeypatch) -> None:
@@ -79,3 +76,60 @@ def test_the_default_sim_config_falls_back_to_the_package_s_own(tmp_path, monkey
 )
 def test_namespace_resolves_like_a_ros_name(namespace, node_namespace, expected) -> None:
     assert resolve_namespace(namespace, node_namespace) == expected
+
+
+def launch_args(name: str) -> tuple[dict[str, str], dict[str, str]]:
+    """A launch file's top-level <arg> defaults, and the <param>s of its nodes (name -> value)."""
+    root = ET.parse(LAUNCH / name).getroot()
+    args = {arg.get("name"): arg.get("default") for arg in root.findall("arg")}
+    params = {param.get("name"): param.get("value") for param in root.iter("param")}
+    return args, params
+
+
+def test_projectairsim_launch_passes_every_setting_as_a_parameter_with_the_nodes_default() -> None:
+    args, params = launch_args("projectairsim.launch")
+    names = [setting.name for setting in SETTINGS]
+    assert sorted(set(names) - set(args)) == [], "settings the launch file has no <arg> for"
+    assert sorted(set(args) - {*names, "nodename"}) == [], "launch <arg>s that are no setting"
+    assert {name: params.get(name) for name in names} == {name: f"$(arg {name})" for name in names}
+    expected = {s.name: LAUNCH_OWN_DEFAULTS.get(s.name, str(s.default)) for s in SETTINGS}
+    assert {name: args[name] for name in names} == expected
+
+
+@pytest.mark.parametrize("name", sorted(path.name for path in LAUNCH.glob("*.launch")))
+def test_every_launch_file_defaults_to_the_default_ports(name: str) -> None:
+    args, _params = launch_args(name)
+    ports = (args.get("topicsport"), args.get("servicesport"))
+    assert ports == (str(TOPICS_PORT), str(SERVICES_PORT))
+
+
+def test_the_node_knows_its_final_name_before_init_node_as_rospy_will_make_it() -> None:
+    from airsim_mapper.cli.node import node_identity
+
+    name, namespace = node_identity(None, ["node.py"])
+    assert name.startswith(f"projectairsim_{os.getpid()}_") and namespace == "/"
+    assert node_identity("bridge", ["node.py"])[0] == "bridge"
+    assert node_identity("bridge", ["node.py", "__name:=renamed", "__ns:=/fleet"]) == ("renamed", "/fleet/")
+
+
+def test_the_start_scene_is_read_and_expanded_once_when_the_final_name_is_the_early_one(monkeypatch) -> None:
+    from airsim_mapper.cli.node import prepare
+    from airsim_mapper.mapping import pipeline
+
+    calls = {"expand": 0, "read_scene": 0}
+
+    def counted(name, real):
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return real(*args, **kwargs)
+
+        return call
+
+    monkeypatch.setattr(pipeline, "expand", counted("expand", pipeline.expand))
+    monkeypatch.setattr(pipeline, "read_scene", counted("read_scene", pipeline.read_scene))
+    settings = {"mapping": "default", "scene": "scene_basic_drone.jsonc", "simconfigpath": str(SIM_CONFIG)}
+    early = prepare(settings, "projectairsim_1_2", "")
+    final = prepare(settings, "projectairsim_1_2", "", early)
+    assert final.specs is early.specs and calls == {"expand": 1, "read_scene": 1}
+    renamed = prepare(settings, "other", "", early)  # a __name:= the early look could not know
+    assert renamed.scene is early.scene and calls == {"expand": 2, "read_scene": 1}

@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 from airsim_mapper.convert import catalog
-from airsim_mapper.mapping.errors import ConfigError
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
 

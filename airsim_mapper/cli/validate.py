@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from airsim_mapper.mapping.errors import ConfigError
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.expand import selected
 from airsim_mapper.mapping.match import describe
 from airsim_mapper.mapping.model import BridgeSpec, Mapping

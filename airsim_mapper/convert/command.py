@@ -25,6 +25,7 @@ import numpy as np
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.logs import shorten
 
 DEFAULT_DURATION_S = 3.0
 QUAT_NORM_MIN = 0.5
@@ -32,7 +33,6 @@ QUAT_NORM_MAX = 2.0
 DEFAULT_ACCEPTED_FRAMES = ("", "map")
 CAMERA_POSE_FRAME_ID = "DEFAULT_ID"
 MAX_SCENE_NAME = 4096  # characters: PATH_MAX
-SHOWN_NAME = 200  # characters of a refused name that a log line shows
 CLAMP = "clamp"
 REJECT = "reject"
 
@@ -268,8 +268,3 @@ def load_scene(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
     if not scene:
         raise ConversionError("load_scene: the scene name is empty")
     return {"scene": scene}
-
-
-def shorten(text: str, keep: int = SHOWN_NAME) -> str:
-    """`text`, or its first `keep` characters and how many more there were (for log lines)."""
-    return text if len(text) <= keep else f"{text[:keep]}...({len(text) - keep} more)"

@@ -1,9 +1,17 @@
-"""Errors raised by converters and by the converter registry."""
+"""Errors raised by converters and by the converter registry, all ConvertErrors."""
 
 from __future__ import annotations
 
+from airsim_mapper.errors import AirsimMapperError
 
-class ConversionError(ValueError):
+__all__ = ["ContextError", "ConversionError", "ConvertError", "ConverterNotFound", "OversizedData"]
+
+
+class ConvertError(AirsimMapperError):
+    """The convert layer's base."""
+
+
+class ConversionError(ConvertError, ValueError):
     """A message could not be converted: missing keys, wrong sizes, non-finite values, unknown encodings.
 
     The message names the offending field, e.g.
@@ -15,7 +23,7 @@ class OversizedData(ConversionError):
     """A message larger than its bound (an image over ``max_pixels``): dropped and counted as oversized."""
 
 
-class ConverterNotFound(LookupError):
+class ConverterNotFound(ConvertError, LookupError):
     """No converter of that name exists in the catalogue."""
 
     def __init__(self, name: str, suggestions: list[str]) -> None:
@@ -25,5 +33,5 @@ class ConverterNotFound(LookupError):
         self.suggestions = suggestions
 
 
-class ContextError(ValueError):
+class ContextError(ConvertError, ValueError):
     """A ConvertContext was built with an invalid option value."""

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.convert import catalog, registry
-from airsim_mapper.convert.command import require_finite, shorten
+from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.engine.hub import StreamHub
@@ -24,6 +24,7 @@ from airsim_mapper.engine.replays import LatchedReplays, connection_header
 from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink, SimLinkError
 from airsim_mapper.engine.simtime import SimTimeWatch
+from airsim_mapper.logs import RateLimitedLog, shorten
 from airsim_mapper.mapping.model import BridgeSpec
 
 log = logging.getLogger("rosout.airsim_mapper.bridge")
@@ -40,25 +41,6 @@ class BridgeStats:
     last_error: str = ""
     stale_dropped: int = 0  # messages taken before a lazy bridge attached (the simulator's cached frame)
     clamped: int = 0  # commands changed to keep them within their limits
-
-
-class Throttled:
-    """A warning logger that says each bridge's problem at most once per period, with a count."""
-
-    def __init__(self, name: str, period: float = WARN_PERIOD_S) -> None:
-        self.name = name
-        self.period = period
-        self._last = -1e9
-        self._suppressed = 0
-
-    def warn(self, message: str) -> None:
-        now = time.monotonic()
-        if now - self._last < self.period:
-            self._suppressed += 1
-            return
-        extra = f" ({self._suppressed} more since last report)" if self._suppressed else ""
-        self._last, self._suppressed = now, 0
-        log.warning("%s: %s%s", self.name, message, extra)
 
 
 @dataclass
@@ -102,7 +84,7 @@ class Bridge:
         self.services = services
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
-        self.warn = Throttled(spec.name).warn
+        self.warn = RateLimitedLog(log, WARN_PERIOD_S, prefix=spec.name).warn
         self.ctx = make_context(spec, services, self.clamped)
 
     def after_call(self, params: dict, result: Any) -> None:

@@ -3,25 +3,16 @@
 Data flows one way: scene + mapping --expand--> BridgeSpecs --build--> runners wired to the sim link and
 the ROS link. The node's own bridges (load_scene) start before any scene (`start_node_bridges`) and keep
 running, untouched, across scene changes; a scene change tears the scene's runners down and builds the new
-scene's.
+scene's. Scene requests from ROS wait in a short queue for the scene-loader thread.
 
-Simulator loss (health.py decides; only a closed connection is a loss): the link is abandoned at once
-(its calls fail fast, its sockets are closed so a restarted server's single topics connection is free),
-the status topic says "stale", and robots are no longer considered moving. A simulator that stops
-answering on an open connection is only reported stale ("unresponsive") until it answers again: nothing
-is reloaded, because it still has its scene. The status topic is published by a thread of its own, at
-its rate, whatever the simulator does. If the engine may make clients (`client_factory`), it reconnects
-with backoff: a new client, the last scene reloaded, and the same streams re-subscribed on the new link,
-so ROS publishers, subscribers and their peers never notice more than a pause. A client supplied by a
-mission script is never replaced behind its owner's back: the engine only reports "stale" until the
-script loads or adopts a scene again.
+The engine owns the bridges, the scene and the link; its supervisor (supervisor.py) watches the link's
+health, reconnects, runs the command watchdog and publishes the status. Both change the bridges and the
+link under the engine's one lock (`Engine.lock`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import copy
-import functools
 import gc
 import logging
 import queue
@@ -31,58 +22,29 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.convert.command import shorten
-from airsim_mapper.engine.bridges import Bridge, RosToSim, Services, Throttled, build
-from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
+from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services, build
+from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import RosLink
-from airsim_mapper.engine.sim_link import FrameCounts, SimLink, close_client
+from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
-from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
+from airsim_mapper.engine.supervisor import Supervisor
+from airsim_mapper.engine.validated_world import load_validated_world
+from airsim_mapper.errors import ConfigError
+from airsim_mapper.logs import RateLimitedLog, shorten
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
-from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.scene import Scene, read_scene
 
 log = logging.getLogger("rosout.airsim_mapper.engine")
-WATCHDOG_PERIOD_S = 0.05
-STATUS_PERIOD_S = 1.0
-RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)
+bridge_log = logging.getLogger("rosout.airsim_mapper.bridge")  # sim-time warnings, as the bridges' own
 MAX_QUEUED_SCENES = 8  # load_scene requests waiting for the scene-loader thread
 REFUSALS_LOGGED, REFUSALS_PERIOD_S = 10, 10.0  # at most this many refused loads logged per period
 SHOWN_LINE = 300  # characters of an error line a refusal log shows
 SHUTDOWN_TIMEOUT_S = 5.0  # shutdown's total budget; the simulator gets at most UNSUBSCRIBE_TIMEOUT_S of it
 UNSUBSCRIBE_TIMEOUT_S = 2.0
-
-
-class EngineError(RuntimeError):
-    """The engine cannot do what was asked right now (the message says why)."""
-
-
-class LogBudget:
-    """Warnings limited to `count` per `period` seconds; the next one logged says how many were held back."""
-
-    def __init__(self, logger: logging.Logger, count: int, period: float) -> None:
-        self.logger, self.count, self.period = logger, count, period
-        self._window_start = -1e9
-        self._logged = 0
-        self._held = 0
-        self._lock = threading.Lock()
-
-    def warn(self, message: str) -> None:
-        with self._lock:
-            now = time.monotonic()
-            if now - self._window_start >= self.period:
-                self._window_start, self._logged = now, 0
-            if self._logged >= self.count:
-                self._held += 1
-                return
-            self._logged += 1
-            held, self._held = self._held, 0
-        suffix = f" ({held} more not logged before this one)" if held else ""
-        self.logger.error("%s%s", message, suffix)
 
 
 class Engine:
@@ -114,11 +76,11 @@ class Engine:
         self.namespace = namespace
         self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
         self._link = link
-        self.sim = link(client, self.frame_counts)
+        self.sim = self.make_link(client)
         self.ros = ros or RosLink()
         self.hub = StreamHub(self.sim, self.ros.send_tf)
         self.shared: dict[Any, Any] = {}
-        self.sim_time = SimTimeWatch(warn=Throttled("sim time").warn)
+        self.sim_time = SimTimeWatch(warn=RateLimitedLog(bridge_log, WARN_PERIOD_S, prefix="sim time").warn)
         self.services = Services(
             self.sim,
             self.hub,
@@ -131,28 +93,40 @@ class Engine:
         self.bridges: dict[str, Bridge] = {}
         self.scene: Scene | None = None
         self.world: Any = None
-        self._load_world = load_world or _load_world
-        self._lock = threading.RLock()
+        self.load_world = load_world or load_validated_world
+        self.lock = threading.RLock()
         self._scene_requests: queue.Queue[str | None] = queue.Queue(MAX_QUEUED_SCENES)
         self._loading: str | None = None  # the scene file being loaded by the scene-loader thread
-        self._refusals = LogBudget(log, REFUSALS_LOGGED, REFUSALS_PERIOD_S)
+        self._refusals = RateLimitedLog(log, REFUSALS_PERIOD_S, REFUSALS_LOGGED, logging.ERROR)
         self._running = True
-        self._client_factory = client_factory
-        self.state = CONNECTED
-        self.reason = ""
-        self.counters = {"sim_losses": 0, "reconnects": 0, "stalls": 0}
         self.mapping_report: dict[str, Any] = {}  # live reload's state (engine/mapping_reload.py)
-        self._stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
-        self._stopping = threading.Event()
-        self._status = StatusPublisher(self.ros, node_name)
-        self._threads = [
-            threading.Thread(target=self._watchdog_loop, name="watchdog", daemon=True),
-            threading.Thread(target=self._scene_loop, name="scene-loader", daemon=True),
-            threading.Thread(target=self._health_loop, name="sim-health", daemon=True),
-            threading.Thread(target=self._status_loop, name="status", daemon=True),
-        ]
-        for thread in self._threads:
-            thread.start()
+        self.supervisor = Supervisor(self, client_factory)
+        threading.Thread(target=self._scene_loop, name="scene-loader", daemon=True).start()
+        self.supervisor.start()
+
+    # --- the supervisor's state and reports -------------------------------------------------
+    @property
+    def state(self) -> str:
+        return self.supervisor.state
+
+    @property
+    def reason(self) -> str:
+        return self.supervisor.reason
+
+    @property
+    def counters(self) -> dict[str, int]:
+        return self.supervisor.counters
+
+    def status(self) -> dict[str, Any]:
+        """The node's state, its counters and the statistics of every simulator stream."""
+        return self.supervisor.status()
+
+    def publish_status(self) -> None:
+        self.supervisor.publish_status()
+
+    def sim_lost(self, reason: str) -> None:
+        """Mark the link lost: nothing more is sent on it; robots are no longer driven."""
+        self.supervisor.sim_lost(reason)
 
     # --- building ---------------------------------------------------------------------------
     def specs_for(self, scene: Scene | None) -> tuple[BridgeSpec, ...]:
@@ -161,7 +135,7 @@ class Engine:
 
     def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
         """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
-        with self._lock:
+        with self.lock:
             if self.scene is not None:
                 return tuple(b.spec for b in self.bridges.values())
             return self.apply(None)
@@ -172,7 +146,7 @@ class Engine:
         """Run exactly the bridges of `scene` (its `specs`, when already expanded): stop the old scene's,
         start the new ones."""
         specs = self.specs_for(scene) if specs is None else specs
-        with self._lock:
+        with self.lock:
             self._stop_scene_bridges(keep={s.name: s for s in specs})
             if self._freeze_heap:
                 thaw_heap()  # the old scene's bridges are garbage now: let the collector see them again
@@ -220,7 +194,7 @@ class Engine:
         spec is unchanged keep running (their publishers, subscribers and simulator subscriptions), removed
         and changed ones stop, new and changed ones start. Without a scene that is the node's own bridges.
         MappingError (nothing changed) when `mapping` does not expand over the running scene."""
-        with self._lock:
+        with self.lock:
             specs = expand(mapping, self.scene, self.node_name, self.namespace)
             diff = bridge_diff((b.spec for b in self.bridges.values()), specs)
             self.mapping = mapping
@@ -250,13 +224,13 @@ class Engine:
             scene = read_scene(self.sim_config_path, scene_file)  # path and config checks first
         # The mapping must expand for the scene before anything is torn down.
         specs = self.specs_for(scene) if specs is None else specs
-        with self._lock:
-            self._require_link(f"load_scene {scene_file}")
+        with self.lock:
+            self.supervisor.require_link(f"load_scene {scene_file}")
             self._stop_scene_bridges(keep={s.name: s for s in specs})  # the node's own bridges stay
             self.hub.drop_all()
             self.sim.forget_all()
             try:
-                self.world = self._load_world(self.client, scene, self.sim_config_path)
+                self.world = self.load_world(self.client, scene, self.sim_config_path)
             except Exception:
                 if self.scene is not None:
                     log.error("loading %s failed; restoring the bridges of %s", scene_file, self.scene.file)
@@ -269,8 +243,8 @@ class Engine:
     def adopt(self, scene: Scene, world: Any = None) -> None:
         """A mission script loaded `scene` itself: its load cleared every subscription, so re-bridge."""
         specs = self.specs_for(scene)
-        with self._lock:
-            self._require_link("adopt")
+        with self.lock:
+            self.supervisor.require_link("adopt")
             self._stop_scene_bridges(keep={s.name: s for s in specs})  # the node's own bridges stay
             self.hub.drop_all()
             self.sim.forget_all()
@@ -324,191 +298,17 @@ class Engine:
             raise ValueError(f"the engine has no action {action!r}")
         actions[action](params)
 
-    # --- simulator health and reconnection ---------------------------------------------------
-    def _require_link(self, what: str) -> None:
-        """Before a scene change: a lost link is an error, except a supplied client the owner revived."""
-        if not self.sim.dead:
-            return
-        if self._client_factory is not None:
-            raise EngineError(f"{what}: the simulator connection is lost; the node is reconnecting")
-        self.sim.stop_loop()  # the mission script's client: its owner says it works again
-        self._swap_link(self._link(self.client, self.frame_counts), self.client, self.world)
+    # --- the link ---------------------------------------------------------------------------
+    def make_link(self, client: Any) -> SimLink:
+        """A link on `client` that counts refused frames in this engine's counts (kept across reconnects)."""
+        return self._link(client, self.frame_counts)
 
-    def _swap_link(self, link: SimLink, client: Any, world: Any) -> None:
+    def swap_link(self, link: SimLink, client: Any, world: Any) -> None:
+        """Run every bridge over `link` from now on (under the lock: the supervisor's reconnect)."""
         self.client, self.sim, self.services.sim, self.world = client, link, link, world
         self.hub.rebind(link)
-        self.state, self.reason = CONNECTED, ""
 
-    def _health_loop(self) -> None:
-        check, backoff = HealthCheck(), Backoff()
-        next_attempt = 0.0
-        while self._running:
-            now = time.monotonic()
-            if self.state == CONNECTED or self._stalled_since is not None:
-                self.sim.ensure_receiver()
-                verdict = check.check(self.sim)
-                if not self._running:
-                    break
-                if verdict.kind == LOST:
-                    self.sim_lost(verdict.reason)
-                    backoff.reset()
-                    next_attempt = time.monotonic() + backoff.next_delay()
-                elif verdict.kind == OK:
-                    self._answering()
-                else:
-                    self._stalled(verdict.reason)
-            elif self._client_factory is not None and now >= next_attempt and self._running:
-                failure = self._reconnect()
-                if failure is None:
-                    check.reset()
-                    backoff.reset()
-                else:
-                    attempt, delay = backoff.attempt, backoff.next_delay()
-                    next_attempt = time.monotonic() + delay
-                    log.warning("reconnect attempt %d: %s; next in %.1f s", attempt, failure, delay)
-            wait = PROBE_PERIOD_S
-            if self.state != CONNECTED and self._stalled_since is None:
-                wait = min(wait, max(0.02, next_attempt - time.monotonic()))
-            self._stopping.wait(wait)
-
-    def _status_loop(self) -> None:
-        while not self._stopping.wait(STATUS_PERIOD_S):
-            self.publish_status()
-
-    def _stalled(self, reason: str) -> None:
-        """The simulator stopped answering on an open connection: stale, but nothing is torn down."""
-        with self._lock:
-            if self.state != CONNECTED:
-                return
-            self.state, self.reason = STALE, f"unresponsive: {reason}"
-            self._stalled_since = time.monotonic()
-            self.counters["stalls"] += 1
-        log.error("simulator not answering (%s); topics are stale; waiting for it", reason)
-        self.publish_status()
-
-    def _answering(self) -> None:
-        """A probe was answered: an unresponsive simulator is back, on the same connection and scene."""
-        with self._lock:
-            since = self._stalled_since
-            if since is None:
-                return
-            self._stalled_since = None
-            self.state, self.reason = CONNECTED, ""
-        log.warning(
-            "simulator answers again after %.1f s; its scene kept running, nothing reloaded",
-            time.monotonic() - since,
-        )
-        self.publish_status()
-
-    def sim_lost(self, reason: str) -> None:
-        """Mark the link lost: nothing more is sent on it; robots are no longer driven."""
-        with self._lock:
-            if self.state != CONNECTED and self._stalled_since is None:
-                return
-            self._stalled_since = None
-            self.state, self.reason = STALE, reason
-            self.counters["sim_losses"] += 1
-            for bridge in list(self.bridges.values()):
-                if isinstance(bridge, RosToSim):
-                    bridge.moving = False
-            if self._client_factory is not None:
-                self.sim.abandon()
-            else:
-                self.sim.mark_dead()
-        how = "reconnecting" if self._client_factory is not None else "the mission script owns the client"
-        log.error("simulator lost (%s); topics are stale; %s", reason, how)
-        self.publish_status()
-
-    def _reconnect(self) -> str | None:
-        """One attempt: new client, last scene reloaded, streams moved over. None on success, else why not.
-
-        The scene is loaded on the new client before anything is swapped, without the engine's lock, so a
-        slow simulator never holds up status, scene requests or shutdown."""
-        try:
-            client = self._client_factory()
-        except SimUnreachable as exc:
-            return str(exc)
-        start = time.monotonic()
-        scene = self.scene
-        link = self._link(client, self.frame_counts)  # first, so the scene load already uses its receive loop
-        guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
-        guard.start()
-        try:
-            world = self._load_world(client, scene, self.sim_config_path) if scene else None
-        except Exception as exc:
-            link.abandon()
-            return f"reloading {scene.file if scene else 'the scene'} failed: {type(exc).__name__}: {exc}"
-        finally:
-            guard.cancel()
-        with self._lock:
-            if not self._running or self.scene is not scene:
-                link.abandon()
-                return "shutting down" if not self._running else "the scene changed meanwhile"
-            old = self.sim
-            self.shared.clear()
-            self._swap_link(link, client, world)
-            self.counters["reconnects"] += 1
-        old.stop_loop()
-        log.info(
-            "simulator back: %s reloaded, %d bridges restored in %.2f s",
-            scene.file if scene else "no scene",
-            len(self.bridges),
-            time.monotonic() - start,
-        )
-        self.publish_status()
-        return None
-
-    # --- status -----------------------------------------------------------------------------
-    def status(self) -> dict[str, Any]:
-        """The node's state, its counters and the statistics of every simulator stream."""
-        now = time.monotonic()
-        streams = {
-            topic: {
-                "received": s.stats.received,
-                "dropped": s.stats.dropped,
-                "handled": s.stats.handled,
-                "errors": s.stats.errors,
-                "age_s": round(now - s.stats.last_receive, 3) if s.stats.last_receive else None,
-                **s.stats.take_peaks(),
-            }
-            for topic, s in self.hub.streams().items()
-        }
-        errors = {name: b.stats.errors for name, b in list(self.bridges.items()) if b.stats.errors}
-        return {
-            "state": self.state,
-            "reason": self.reason,
-            "scene": self.scene.file if self.scene else None,
-            **self.counters,
-            "bad_frames": self.frame_counts.bad,
-            "oversized_frames": self.frame_counts.oversized,
-            "sim_time_jumps_back": self.sim_time.jumps_back,
-            "sim_time_last_jump_back_s": round(self.sim_time.last_jump_s, 3),
-            "gc_max_ms": self.gc_pauses.take_peak_ms(),
-            "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
-            "streams": streams,
-            "bridge_errors": errors,
-            **({"mapping": self.mapping_report} if self.mapping_report else {}),
-        }
-
-    def publish_status(self) -> None:
-        status = self.status()
-        try:
-            self._status.publish(status)
-        except Exception as exc:  # rospy shutting down
-            log.debug("status not published: %s", exc)
-
-    # --- watchdog and shutdown --------------------------------------------------------------
-    def _watchdog_loop(self) -> None:
-        while self._running:
-            now = time.monotonic()
-            for bridge in list(self.bridges.values()):
-                if isinstance(bridge, RosToSim):
-                    try:
-                        bridge.check_watchdog(now)
-                    except Exception:
-                        log.exception("watchdog of %s failed", bridge.spec.name)
-            time.sleep(WATCHDOG_PERIOD_S)
-
+    # --- shutdown --------------------------------------------------------------
     def shutdown(self, timeout: float = SHUTDOWN_TIMEOUT_S, client_topics: bool = False) -> bool:
         """Stop every bridge (robots with a running velocity command are stopped) and the link, within
         `timeout` seconds whatever the simulator does: the server is told to unsubscribe in one request,
@@ -517,11 +317,11 @@ class Engine:
         answer."""
         end = time.monotonic() + timeout
         self._running = False
-        self._stopping.set()
+        self.supervisor.stop()
         with contextlib.suppress(queue.Full):  # a full queue's loader sees _running false after its load
             self._scene_requests.put_nowait(None)
         self.sim.begin_close()  # unsubscribes are collected, sent once below
-        locked = self._lock.acquire(timeout=max(0.0, (end - time.monotonic()) / 2))
+        locked = self.lock.acquire(timeout=max(0.0, (end - time.monotonic()) / 2))
         try:
             for name, bridge in list(self.bridges.items()):
                 try:
@@ -531,50 +331,16 @@ class Engine:
             self.bridges.clear()
         finally:
             if locked:
-                self._lock.release()
+                self.lock.release()
         time.sleep(0.1)  # let the last stop commands leave
         budget = min(UNSUBSCRIBE_TIMEOUT_S, max(0.1, end - time.monotonic() - 0.5))
         answered = self.sim.close(timeout=budget, client_topics=client_topics)
         self.hub.drop_all()
         self.ros.close()
-        self.state = STOPPED
-        self.publish_status()
-        self._status.close()
+        self.supervisor.close()
         self.gc_pauses.close()
         return answered
 
 
 def _scene_independent(spec: BridgeSpec) -> bool:
     return "scene_name" not in spec.variables
-
-
-def _load_world(client: Any, scene: Scene, sim_config_path: str) -> Any:
-    """A projectairsim World on `scene` as it was validated (`Scene.config`): no file is read again."""
-    return validated_world_class()(client, scene, sim_config_path)
-
-
-@functools.cache
-def validated_world_class() -> type:
-    """The World subclass `_load_world` uses (made on first use: projectairsim is imported lazily)."""
-    from projectairsim import World
-
-    class ValidatedWorld(World):
-        """World.__init__ of projectairsim 1.1.0 step for step, except that the scene dict is the one
-        read_scene validated instead of whatever the file holds now (it may have been edited, or replaced
-        by a symlink out of the config directory, since)."""
-
-        def __init__(self, client: Any, scene: Scene, sim_config_path: str) -> None:
-            self.client = client
-            self.sim_config_path = sim_config_path.rstrip("/") + "/"
-            self.sim_instance_idx = -1
-            self.parent_topic = "/Sim/SceneBasicDrone"
-            self.sim_config = None
-            self.home_geo_point = None
-            self.scene_config_path = str(Path(scene.config_dir) / scene.file)
-            self.robot_config_paths: list[str] = []
-            self.envactor_config_paths: list[str] = []
-            self.load_scene(copy.deepcopy(dict(scene.config)), delay_after_load_sec=0)
-            zeros = [0, 0]
-            self.import_ned_trajectory("null_trajectory", [0, 1], zeros, zeros, zeros, zeros, zeros, zeros)
-
-    return ValidatedWorld

@@ -17,6 +17,8 @@ import contextlib
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from airsim_mapper.engine.errors import EngineError
+
 PROBE_PERIOD_S = 0.5
 PROBE_TIMEOUT_S = 1.0
 PROBE_MISSES = 3
@@ -42,7 +44,7 @@ class Verdict:
     reason: str = ""
 
 
-class SimUnreachable(ConnectionError):
+class SimUnreachable(EngineError, ConnectionError):
     """No simulator answers at an address."""
 
     def __init__(self, address: str, topicsport: int, servicesport: int, cause: BaseException) -> None:

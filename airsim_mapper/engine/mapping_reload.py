@@ -15,8 +15,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.diff import BridgeDiff
-from airsim_mapper.mapping.errors import ConfigError
 from airsim_mapper.mapping.model import Mapping
 
 log = logging.getLogger("rosout.airsim_mapper.mapping")

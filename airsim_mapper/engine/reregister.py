@@ -17,12 +17,14 @@ import xmlrpc.client
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from airsim_mapper.engine.errors import EngineError
+
 log = logging.getLogger("rosout.airsim_mapper.master")
 POLL_PERIOD_S = 1.0
 MASTER_CALLER = "/master"
 
 
-class ReregisterError(RuntimeError):
+class ReregisterError(EngineError):
     """The master refused a registration."""
 
     def __init__(self, kind: str, name: str, message: str) -> None:

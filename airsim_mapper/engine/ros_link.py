@@ -14,20 +14,20 @@ import rospy.topics
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
-from airsim_mapper.convert.command import shorten
+from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.logs import shorten
+from airsim_mapper.ros_types import generated_kind
 
 CLEAR_AGAIN_S = 1.0  # tf's buffer is cleared once more this long after a jump back in time
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
-class RosTypeError(LookupError):
+class RosTypeError(EngineError, LookupError):
     """A ROS message or service type could not be imported."""
 
 
 def message_class(ros_type: str, kind: str = "msg") -> type:
     """`pkg/Name` -> the generated class from `pkg.msg` (or `pkg.srv`); only genpy-generated types."""
-    from airsim_mapper.mapping.checks import generated_kind
-
     package, _, name = ros_type.partition("/")
     if generated_kind(ros_type) != ("topic" if kind == "msg" else "service"):
         raise RosTypeError(f"ROS {kind} type {ros_type!r} is not a genpy-generated {kind} type")
@@ -151,7 +151,7 @@ def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> Transform
     return t
 
 
-class FrameUnknown(LookupError):
+class FrameUnknown(EngineError, LookupError):
     """tf cannot transform a message's frame into the frame a command needs."""
 
     def __init__(self, source: str, target: str, why: str) -> None:

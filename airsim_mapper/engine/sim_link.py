@@ -33,8 +33,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.fast_frames import decode_map
 from airsim_mapper.engine.health import PROBE_METHOD
+from airsim_mapper.logs import RateLimitedLog
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 
@@ -58,7 +60,7 @@ class FrameCounts:
     oversized: int = 0  # over max_frame_bytes, or an image over its pixel bound
 
 
-class SimLinkError(RuntimeError):
+class SimLinkError(EngineError):
     """A simulator request failed."""
 
 
@@ -92,8 +94,9 @@ class SimLink:
         for sock in self._watched:
             sock.add_post_pipe_remove_cb(self._on_pipe_removed)
         self.fast_frames = 0  # frames decoded on the fast path
-        self._last_warning = -1e9
-        self._unreported = 0
+        self._warn = RateLimitedLog(
+            log, WARN_PERIOD_S
+        ).warn  # dropped frames, with a count of those held back
         self.ensure_receiver()
 
     # --- receiving --------------------------------------------------------------------------
@@ -171,16 +174,6 @@ class SimLink:
     def _bad_frame(self, message: str) -> None:
         self.counts.bad += 1
         self._warn(message)
-
-    def _warn(self, message: str) -> None:
-        """Log a dropped frame at most once per WARN_PERIOD_S, with a count of those held back."""
-        now = time.monotonic()
-        if now - self._last_warning < WARN_PERIOD_S:
-            self._unreported += 1
-            return
-        extra = f" ({self._unreported} more since last report)" if self._unreported else ""
-        self._last_warning, self._unreported = now, 0
-        log.warning("%s%s", message, extra)
 
     # --- liveness ---------------------------------------------------------------------------
     def _on_pipe_removed(self, _pipe: Any) -> None:

@@ -1,46 +1,14 @@
-"""Configuration errors: every problem found in a mapping or scene, each located as FILE:LINE:COL."""
+"""The mapping layer's errors: every problem found in a mapping, each located as FILE:LINE:COL.
+
+`Problem` and `ConfigError` live in the leaf `airsim_mapper.errors` (scene.py, below this layer, raises
+ConfigErrors too); they are re-exported here for the mapping modules."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
+from airsim_mapper.errors import ConfigError, Problem
 
-
-def _one_line(message: str) -> str:
-    """The message with unprintable characters (newlines, form feeds, ...) escaped, so it stays one line."""
-    if message.isprintable():
-        return message
-    return "".join(char if char.isprintable() else repr(char)[1:-1] for char in message)
-
-
-@dataclass(frozen=True, order=True)
-class Problem:
-    """One problem at one place in one file (line and column are 1-based; 0 means unknown)."""
-
-    file: str
-    line: int
-    column: int
-    message: str
-
-    def __str__(self) -> str:
-        message = _one_line(self.message)
-        if self.line <= 0:
-            return f"{self.file}: {message}"
-        return f"{self.file}:{self.line}:{max(self.column, 1)}: {message}"
-
-
-class ConfigError(Exception):
-    """A mapping or a scene is invalid; str() is the full report, one `FILE:LINE:COL: message` a line."""
-
-    def __init__(self, problems: Iterable[Problem], unreadable: bool = False) -> None:
-        self.problems: tuple[Problem, ...] = tuple(problems)
-        self.unreadable = unreadable  # the file itself could not be read (the CLI exits 2, not 1)
-        super().__init__("\n".join(str(p) for p in self.problems))
-
-    @classmethod
-    def single(cls, file: str, message: str, line: int = 0, column: int = 0, unreadable: bool = False):
-        return cls([Problem(file, line, column, message)], unreadable=unreadable)
+__all__ = ["ConfigError", "MappingError", "Problem"]
 
 
 class MappingError(ConfigError):
-    """The mapping YAML is invalid, or cannot be expanded over the scene."""
+    """The mapping YAML is invalid, or cannot be expanded over the scene (the mapping layer's base)."""

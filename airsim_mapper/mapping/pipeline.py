@@ -1,13 +1,58 @@
-"""Mapping file + scene -> concrete bridges, in one call (what the node and validate-mapping both use)."""
+"""Mapping file + scene -> concrete bridges (what the node, validate-mapping and the tools all use).
+
+`prepare` is the one implementation: it loads the mapping and, with a scene, reads it and expands the
+mapping over it for a node name and namespace. Given what an earlier call prepared (`known`), it reuses
+what still holds: the same files are not read again, and the same names are not expanded again (the node
+prepares once before it connects, to refuse a bad mapping early, and again with its final ROS name).
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.scene import Scene, read_scene
+
+__all__ = ["Prepared", "load_and_expand", "prepare"]
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A mapping, and the scene as read and the mapping expanded over it for a node name and namespace."""
+
+    sources: tuple[str, str, str]  # (mapping, scene file, sim config directory) it was made from
+    node_name: str
+    namespace: str
+    mapping: Mapping
+    scene: Scene | None = None
+    specs: tuple[BridgeSpec, ...] | None = None
+
+
+def prepare(
+    mapping_path: str | Path,
+    scene_file: str,
+    simconfigpath: str | Path,
+    node_name: str,
+    namespace: str = "",
+    known: Prepared | None = None,
+) -> Prepared:
+    """Load the mapping and, with a scene file, read the scene and expand the mapping over it; raise
+    MappingError or SceneConfigError (both ConfigError), or OSError. What `known` holds for the same
+    sources (and names) is reused, not read (or expanded) again."""
+    sources = (str(mapping_path), scene_file, str(simconfigpath))
+    same = known is not None and known.sources == sources
+    mapping = known.mapping if same else load_mapping(mapping_path)
+    if not scene_file:
+        return Prepared(sources, node_name, namespace, mapping)
+    scene = known.scene if same else read_scene(simconfigpath, scene_file)
+    if same and (known.node_name, known.namespace) == (node_name, namespace):
+        specs = known.specs
+    else:
+        specs = expand(mapping, scene, node_name, namespace)
+    return Prepared(sources, node_name, namespace, mapping, scene, specs)
 
 
 def load_and_expand(
@@ -17,7 +62,8 @@ def load_and_expand(
     node_name: str,
     namespace: str = "",
 ) -> tuple[Mapping, Scene, tuple[BridgeSpec, ...]]:
-    """Load the mapping, read the scene, expand; raise MappingError or SceneError (both ConfigError)."""
-    mapping = load_mapping(mapping_path)
-    scene = read_scene(simconfigpath, scene_file)
-    return mapping, scene, expand(mapping, scene, node_name, namespace)
+    """Load the mapping, read the scene, expand; raise MappingError or SceneConfigError (both ConfigError)."""
+    if not scene_file:
+        read_scene(simconfigpath, scene_file)  # refuses the empty name as it refuses any other
+    prepared = prepare(mapping_path, scene_file, simconfigpath, node_name, namespace)
+    return prepared.mapping, prepared.scene, prepared.specs  # type: ignore[return-value]

@@ -9,11 +9,16 @@ import re
 from collections.abc import Iterator, Mapping
 from typing import Any
 
+from airsim_mapper.mapping.errors import MappingError, Problem
+
 PLACEHOLDER = re.compile(r"<([a-z][a-z0-9_]*)>")
 
 
-class TemplateError(ValueError):
-    """A template is malformed or names a variable that has no value."""
+class TemplateError(MappingError, ValueError):
+    """A template names a variable that has no value (the checks refuse such a mapping first)."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__([Problem("<template>", 0, 0, message)])
 
 
 def variables(template: str) -> tuple[str, ...]:

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World, WorldObject
 
 NEAR_PLANE_M = 0.1  # Unreal's GNearClippingPlane (10 cm)
@@ -48,7 +49,7 @@ CORNER_SIGNS = np.array(
 )
 
 
-class AnnotationError(ValueError):
+class AnnotationError(SimServerError, ValueError):
     """An `annotation-settings` value is invalid; the message names the key."""
 
 

@@ -25,6 +25,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 SCENE, DEPTH_PLANAR, DEPTH_PERSPECTIVE, SEGMENTATION, DEPTH_VIS, DISPARITY_NORMALIZED, SURFACE_NORMALS = (
@@ -40,7 +41,7 @@ AMBIENT = np.float32(0.35)  # the light a surface facing away from the sun still
 FOG_DISTANCE = np.float32(1500.0)  # metres at which a surface is hazed half way to the sky colour
 
 
-class CameraError(ValueError):
+class CameraError(SimServerError, ValueError):
     """Invalid render request (size, field of view or image type)."""
 
 

@@ -10,6 +10,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.simserver import rendering
 from airsim_mapper.simserver.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
@@ -27,8 +28,15 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         help="bind address (default 127.0.0.1; another address is reachable from the network with no "
         "authentication, and the server warns)",
     )
-    parser.add_argument("--topicsport", type=int, default=8989, help="topics (Pair0) port, default 8989")
-    parser.add_argument("--servicesport", type=int, default=8990, help="services (Rep0) port, default 8990")
+    parser.add_argument(
+        "--topicsport", type=int, default=TOPICS_PORT, help=f"topics (Pair0) port, default {TOPICS_PORT}"
+    )
+    parser.add_argument(
+        "--servicesport",
+        type=int,
+        default=SERVICES_PORT,
+        help=f"services (Rep0) port, default {SERVICES_PORT}",
+    )
     parser.add_argument(
         "--world", default=None, help="world file (JSON or YAML); default: the built-in world"
     )

@@ -24,6 +24,7 @@ import numpy as np
 from airsim_mapper.geometry import quat_to_matrix
 from airsim_mapper.simserver import camera_model, gl_shaders
 from airsim_mapper.simserver.camera_model import RenderedImage, RenderRequest
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 FRONT_FACE = "cw"  # counter-clockwise in NED appears clockwise in the window (image rows run down)
@@ -42,11 +43,11 @@ OUTPUTS = {
 _CACHE_LIMIT = 16  # framebuffers (per size and type set) and scenes kept per process
 
 
-class GLUnavailable(RuntimeError):
+class GLUnavailable(SimServerError, RuntimeError):
     """No OpenGL context can be made in this process (the message says why)."""
 
 
-class GLRenderError(RuntimeError):
+class GLRenderError(SimServerError, RuntimeError):
     """OpenGL refused one render (e.g. a size beyond the driver's limit); the context stays usable."""
 
 

@@ -24,10 +24,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from airsim_mapper.simserver.errors import SimServerError
+
 DEPTH_TYPES = frozenset({1, 2})
 
 
-class EncodingError(RuntimeError):
+class EncodingError(SimServerError, RuntimeError):
     """PNG encoding of a frame failed."""
 
 

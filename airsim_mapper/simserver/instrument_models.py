@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import compose, parse_origin, quat_to_matrix
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 GRAVITY = 9.80665  # m/s^2, NED +z
@@ -42,7 +43,7 @@ BATTERY_OK, BATTERY_LOW, BATTERY_CRITICAL = (
 )
 
 
-class InstrumentError(ValueError):
+class InstrumentError(SimServerError, ValueError):
     """An instrument config value is invalid; the message names the sensor and the key."""
 
 

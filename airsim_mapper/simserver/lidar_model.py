@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import parse_origin, quat_to_matrix
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 _DEFAULTS = {
@@ -36,7 +37,7 @@ _DEFAULTS = {
 }
 
 
-class LidarError(ValueError):
+class LidarError(SimServerError, ValueError):
     """A lidar sensor config value is invalid; the message names the sensor and the key."""
 
 

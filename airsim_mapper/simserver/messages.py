@@ -7,10 +7,11 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.motion import Kinematic
 
 
-class MessageError(ValueError):
+class MessageError(SimServerError, ValueError):
     """A pose or kinematics value sent by the client does not have the expected shape."""
 
 

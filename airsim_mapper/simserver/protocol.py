@@ -20,6 +20,8 @@ from typing import Any
 import msgpack
 import numpy as np
 
+from airsim_mapper.simserver.errors import SimServerError
+
 API_VERSION = 1.0
 
 
@@ -29,11 +31,11 @@ class FrameType(IntEnum):
     MESSAGE = 2
 
 
-class BadFrameError(ValueError):
+class BadFrameError(SimServerError, ValueError):
     """A topics-channel frame that is not a msgpack array [type, topic, body]."""
 
 
-class BadRequestError(ValueError):
+class BadRequestError(SimServerError, ValueError):
     """A services-channel request that is not a double-msgpack request envelope."""
 
 

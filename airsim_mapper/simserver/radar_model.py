@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import parse_origin, quat_to_matrix
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 _FOV_DEFAULTS = {
@@ -48,7 +49,7 @@ _DEFAULTS = {
 _MASK_KEYS = ("azimuth", "elevation", "range", "velocity", "rcs-sqm")
 
 
-class RadarError(ValueError):
+class RadarError(SimServerError, ValueError):
     """A radar sensor config value is invalid; the message names the sensor and the key."""
 
 

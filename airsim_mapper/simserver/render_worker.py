@@ -39,6 +39,7 @@ from pathlib import Path
 
 from airsim_mapper.simserver import rendering
 from airsim_mapper.simserver.camera_model import CameraError, RenderedImage, RenderRequest
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.render_worker")
@@ -48,7 +49,7 @@ AUTOGROUP = Path("/proc/self/autogroup")
 ANSWER_TIMEOUT_S = 10.0  # a render slower than this counts as a hung worker
 
 
-class RenderWorkerError(RuntimeError):
+class RenderWorkerError(SimServerError, RuntimeError):
     """The render process could not be started or stopped answering."""
 
 

@@ -22,6 +22,7 @@ from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
 from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
 IMAGE_TYPE_NAMES = SIM_IMAGE_LEAVES
@@ -43,7 +44,7 @@ DEFAULT_HOME = (47.641468, -122.140165, 122.0)
 EARTH_RADIUS_M = 6378137.0
 
 
-class SceneSpecError(ValueError):
+class SceneSpecError(SimServerError, ValueError):
     """The scene configuration cannot be loaded; the message says what is wrong."""
 
 

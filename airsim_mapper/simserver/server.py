@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
 from airsim_mapper.simserver.scene_spec import SceneSpec, SceneSpecError, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
@@ -41,8 +42,8 @@ class SensorLane:
 @dataclass(frozen=True)
 class ServerOptions:
     address: str = "127.0.0.1"  # anything else exposes an unauthenticated control port: say so
-    topics_port: int = 8989
-    services_port: int = 8990
+    topics_port: int = TOPICS_PORT
+    services_port: int = SERVICES_PORT
     world_path: str | None = None
     pose_rate_hz: float = 100.0
     tick_rate_hz: float | None = None  # None: one physics tick per scene clock step-ns (as the real server)

@@ -16,6 +16,7 @@ from typing import Any
 import pynng
 
 from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.errors import SimServerError
 
 LOG = logging.getLogger("airsim_mapper.simserver.services")
 
@@ -27,7 +28,7 @@ INTERNAL_ERROR = 2.0
 MISSING_PARAMETER = 3.0
 
 
-class ServiceError(Exception):
+class ServiceError(SimServerError):
     """An error reply a handler wants sent back (code 1 = the real server's `Error`)."""
 
     def __init__(self, message: str, code: float = HANDLER_ERROR) -> None:

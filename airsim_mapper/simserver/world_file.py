@@ -15,13 +15,14 @@ from typing import Any
 import numpy as np
 import yaml
 
+from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world import World, WorldObject
 
 DEFAULT_WORLD_PATH = Path(__file__).with_name("default_world.json")
 SHAPES = ("box", "sphere")
 
 
-class WorldError(ValueError):
+class WorldError(SimServerError, ValueError):
     """A world file is malformed; the message names the file and the offending key."""
 
     def __init__(self, source: str, key: str, problem: str) -> None:

@@ -10,8 +10,9 @@ from harness import EXAMPLE_CONFIG, ROOT, SIM_CONFIG, VENV_BIN
 from simconfigs import both_configs
 
 from airsim_mapper.cli.validate import format_table, load_and_expand, main
-from airsim_mapper.mapping.errors import ConfigError, MappingError
-from airsim_mapper.scene import SceneError
+from airsim_mapper.errors import ConfigError
+from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.scene import SceneConfigError
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
 # bridges for scene_drone_sensors.jsonc: the project's sensor drone also has radar1 (detections, tracks, tf)
@@ -119,7 +120,7 @@ def test_load_and_expand_raises_config_errors_whose_text_is_the_full_report(tmp_
         load_and_expand(broken, "scene_basic_drone.jsonc", SIM_CONFIG, "n1")
     assert isinstance(caught.value, MappingError)
     assert str(caught.value) == f"{broken}:2:8: rules: expected array, got 3"
-    assert issubclass(SceneError, ConfigError)
+    assert issubclass(SceneConfigError, ConfigError)
 
 
 def test_a_directory_given_as_mapping_exits_1_naming_it(tmp_path, capsys):

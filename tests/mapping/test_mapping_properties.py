@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.loader import load_mapping_text
 from airsim_mapper.mapping.model import Mapping
-from airsim_mapper.scene import Scene, SceneError, read_scene
+from airsim_mapper.scene import Scene, SceneConfigError, read_scene
 
 WORDS = [
     "version",
@@ -158,7 +158,7 @@ def test_random_scene_and_robot_json_give_a_scene_or_a_scene_error(tmp_path: Pat
     (tmp_path / "robot.jsonc").write_text(json.dumps(robot))
     try:
         result = read_scene(tmp_path, "scene.jsonc")
-    except SceneError as err:
+    except SceneConfigError as err:
         assert str(err)
     else:
         assert isinstance(result, Scene)

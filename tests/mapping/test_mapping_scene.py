@@ -10,7 +10,7 @@ from harness import EXAMPLE_CONFIG, SIM_CONFIG
 from scene_builders import camera, capture
 from simconfigs import both_configs
 
-from airsim_mapper.scene import SceneError, read_scene, scene_from_config
+from airsim_mapper.scene import SceneConfigError, read_scene, scene_from_config
 
 # two different drones, Drone1 the plain one with a disabled GPS: file, scene id, Drone2's origin
 TWO_DRONE_SCENES = {
@@ -62,13 +62,15 @@ def test_merges_a_list_of_robot_configs_like_the_client(write_scene):
 
 def test_refuses_a_scene_path_that_climbs_out_of_the_config_directory(write_scene):
     root = write_scene({"R": []})
-    with pytest.raises(SceneError, match=r"the scene file may not leave the config directory .* \('\.\.'\)"):
+    with pytest.raises(
+        SceneConfigError, match=r"the scene file may not leave the config directory .* \('\.\.'\)"
+    ):
         read_scene(root, "../sim_config/scene.jsonc")
 
 
 def test_refuses_an_absolute_scene_path(write_scene):
     root = write_scene({"R": []})
-    with pytest.raises(SceneError, match="the scene file must be relative to the config directory"):
+    with pytest.raises(SceneConfigError, match="the scene file must be relative to the config directory"):
         read_scene(root, str(root / "scene.jsonc"))
 
 
@@ -78,7 +80,7 @@ def test_refuses_a_symlink_that_leads_out_of_the_config_directory(write_scene, t
     outside.write_text((root / "scene.jsonc").read_text())
     os.symlink(outside, root / "link.jsonc")
     with pytest.raises(
-        SceneError, match=r"link\.jsonc: the scene file resolves outside the config directory"
+        SceneConfigError, match=r"link\.jsonc: the scene file resolves outside the config directory"
     ):
         read_scene(root, "link.jsonc")
 
@@ -88,14 +90,16 @@ def test_refuses_a_robot_config_outside_the_config_directory(write_scene):
     doc = json.loads((root / "scene.jsonc").read_text())
     doc["actors"][0]["robot-config"] = "../robot.jsonc"
     (root / "scene.jsonc").write_text(json.dumps(doc))
-    with pytest.raises(SceneError, match="robot-config of actor 'R' may not leave the config directory"):
+    with pytest.raises(
+        SceneConfigError, match="robot-config of actor 'R' may not leave the config directory"
+    ):
         read_scene(root, "scene.jsonc")
 
 
 def test_a_missing_robot_config_is_an_error_naming_the_file(write_scene):
     root = write_scene({"R": []})
     (root / "robot_R.jsonc").unlink()
-    with pytest.raises(SceneError) as caught:
+    with pytest.raises(SceneConfigError) as caught:
         read_scene(root, "scene.jsonc")
     assert str(caught.value) == f"{root / 'robot_R.jsonc'}: robot config of actor 'R' not found"
     assert not caught.value.unreadable
@@ -104,7 +108,7 @@ def test_a_missing_robot_config_is_an_error_naming_the_file(write_scene):
 def test_invalid_json_in_a_robot_config_is_an_error_naming_the_file(write_scene):
     root = write_scene({"R": []})
     (root / "robot_R.jsonc").write_text('{"physics-type": "non-physics",, }')
-    with pytest.raises(SceneError) as caught:
+    with pytest.raises(SceneConfigError) as caught:
         read_scene(root, "scene.jsonc")
     assert str(caught.value).startswith(
         f"{root / 'robot_R.jsonc'}: invalid JSON in the robot config of actor 'R': Unexpected token"
@@ -114,14 +118,14 @@ def test_invalid_json_in_a_robot_config_is_an_error_naming_the_file(write_scene)
 def test_invalid_json_in_the_scene_is_an_error_naming_the_scene_file(write_scene):
     root = write_scene({"R": []})
     (root / "scene.jsonc").write_text('{"id": "x" // comments are fine, a missing brace is not\n')
-    with pytest.raises(SceneError, match=r"scene\.jsonc: invalid JSON in the scene file"):
+    with pytest.raises(SceneConfigError, match=r"scene\.jsonc: invalid JSON in the scene file"):
         read_scene(root, "scene.jsonc")
 
 
 def test_a_robot_config_that_breaks_the_client_schema_is_an_error_naming_the_file(write_scene):
     root = write_scene({"R": []})
     (root / "robot_R.jsonc").write_text('{"links": []}')
-    with pytest.raises(SceneError) as caught:
+    with pytest.raises(SceneConfigError) as caught:
         read_scene(root, "scene.jsonc")
     assert str(caught.value) == (
         f"{root / 'robot_R.jsonc'}: does not match the robot schema: "
@@ -134,7 +138,7 @@ def test_a_scene_that_breaks_the_client_schema_is_an_error_naming_the_scene(writ
     doc = json.loads((root / "scene.jsonc").read_text())
     del doc["actors"][0]["origin"]
     (root / "scene.jsonc").write_text(json.dumps(doc))
-    with pytest.raises(SceneError) as caught:
+    with pytest.raises(SceneConfigError) as caught:
         read_scene(root, "scene.jsonc")
     assert str(caught.value) == (
         f"{root / 'scene.jsonc'}: does not match the scene schema: actors/0: 'origin' is a required property"
@@ -142,7 +146,7 @@ def test_a_scene_that_breaks_the_client_schema_is_an_error_naming_the_scene(writ
 
 
 def test_a_missing_config_directory_is_an_unreadable_error(tmp_path):
-    with pytest.raises(SceneError, match="the config directory does not exist") as caught:
+    with pytest.raises(SceneConfigError, match="the config directory does not exist") as caught:
         read_scene(tmp_path / "nowhere", "scene.jsonc")
     assert caught.value.unreadable
 
@@ -162,10 +166,10 @@ def test_a_scene_can_be_built_from_a_merged_config_like_world_get_configuration(
 
 
 def test_a_merged_config_without_an_id_or_with_paths_not_inlined_is_a_scene_error():
-    with pytest.raises(SceneError, match=r"^s\.jsonc: the scene configuration has no string 'id'$"):
+    with pytest.raises(SceneConfigError, match=r"^s\.jsonc: the scene configuration has no string 'id'$"):
         scene_from_config({"actors": []}, "s.jsonc", SIM_CONFIG)
     actor = {"type": "robot", "name": "R", "robot-config": "robot.jsonc"}
-    with pytest.raises(SceneError, match="actor 'R': robot-config is not inlined"):
+    with pytest.raises(SceneConfigError, match="actor 'R': robot-config is not inlined"):
         scene_from_config({"id": "S", "actors": [actor]}, "s.jsonc", SIM_CONFIG)
 
 
@@ -176,7 +180,7 @@ def test_a_fifo_scene_or_robot_config_is_refused_at_once_naming_the_file(tmp_pat
 
     from harness import SIM_CONFIG
 
-    from airsim_mapper.scene import SceneError, read_scene
+    from airsim_mapper.scene import SceneConfigError, read_scene
 
     root = tmp_path / "configs"
     shutil.copytree(SIM_CONFIG, root)
@@ -185,13 +189,13 @@ def test_a_fifo_scene_or_robot_config_is_refused_at_once_naming_the_file(tmp_pat
     scene = (root / "scene_drone_sensors.jsonc").read_text()
     (root / "fifo_robot.jsonc").write_text(scene.replace("robot_quadrotor_sensors.jsonc", "robot_fifo.jsonc"))
     start = time.monotonic()
-    with pytest.raises(SceneError) as caught:
+    with pytest.raises(SceneConfigError) as caught:
         read_scene(root, "fifo.jsonc")
     assert (
         str(caught.value)
         == f"{root / 'fifo.jsonc'}: the scene file is a FIFO (named pipe), not a regular file"
     )
-    with pytest.raises(SceneError) as caught:
+    with pytest.raises(SceneConfigError) as caught:
         read_scene(root, "fifo_robot.jsonc")
     assert str(caught.value) == (
         f"{root / 'robot_fifo.jsonc'}: the robot config of actor 'Drone1' is a FIFO (named pipe), "

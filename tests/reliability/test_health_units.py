@@ -133,11 +133,11 @@ def test_a_mapping_can_only_name_converters_from_the_catalogue():
 def test_a_log_budget_logs_so_many_per_period_then_says_how_many_it_held_back(caplog, monkeypatch):
     import logging
 
-    from airsim_mapper.engine import engine
+    from airsim_mapper import logs
 
     now = [100.0]
-    monkeypatch.setattr(engine.time, "monotonic", lambda: now[0])
-    budget = engine.LogBudget(logging.getLogger("budget.test"), 2, 10.0)
+    monkeypatch.setattr(logs.time, "monotonic", lambda: now[0])
+    budget = logs.RateLimitedLog(logging.getLogger("budget.test"), 10.0, 2, logging.ERROR)
     for index in range(5):
         budget.warn(f"refused {index}")
     now[0] += 10.0

@@ -1,0 +1,98 @@
+"""The node's settings: each a switch and a private parameter; the command line wins over the parameter,
+the parameter over the default (the log says where each value came from)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from airsim_mapper.cli.errors import SettingError
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+
+__all__ = ["SETTINGS", "Resolved", "Setting", "given_settings", "resolve_settings", "values"]
+
+
+@dataclass(frozen=True)
+class Setting:
+    """A node switch that is also a private parameter (`--mapping` and `~mapping`)."""
+
+    name: str
+    default: Any
+    help: str
+    kind: type = str
+
+
+DEFAULT_SIM_CONFIG = "sim_config/"
+SETTINGS = (
+    Setting("address", "127.0.0.1", "host running Project AirSim"),
+    Setting("topicsport", TOPICS_PORT, "Project AirSim pub-sub port", int),
+    Setting("servicesport", SERVICES_PORT, "Project AirSim services port", int),
+    Setting(
+        "simconfigpath",
+        DEFAULT_SIM_CONFIG,
+        "directory holding the scene configs (./sim_config/, else the package's own)",
+    ),
+    Setting("mapping", "default", "mapping YAML file, or a shipped mapping's name"),
+    Setting("scene", "", "scene config file to load at start (without one: wait for load_scene)"),
+    Setting("namespace", "", "topic namespace and frame prefix, resolved in the node's ROS namespace"),
+)
+COMMAND_LINE, DEFAULT = "command line", "default"
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """One setting's value and where it came from ("command line", "parameter ~x" or "default")."""
+
+    value: Any
+    source: str
+
+
+def resolve_settings(
+    given: dict[str, Any], get_param: Callable[[str], Any] | None = None
+) -> dict[str, Resolved]:
+    """Each setting from the command line (a value in `given` that is not None), else from its private
+    parameter (`get_param("~name")`, KeyError when unset), else its default."""
+    resolved: dict[str, Resolved] = {}
+    for setting in SETTINGS:
+        if given.get(setting.name) is not None:
+            resolved[setting.name] = Resolved(given[setting.name], COMMAND_LINE)
+            continue
+        try:
+            value = get_param(f"~{setting.name}") if get_param is not None else None
+        except KeyError:
+            value = None
+        if value is None:
+            resolved[setting.name] = Resolved(setting.default, DEFAULT)
+            continue
+        try:
+            value = setting.kind(value)
+        except (TypeError, ValueError):
+            raise SettingError(setting.name, value, setting.kind) from None
+        resolved[setting.name] = Resolved(value, f"parameter ~{setting.name}")
+    return _sim_config_fallback(resolved)
+
+
+def given_settings(args: Any) -> dict[str, Any]:
+    """Each setting as the command line gives it (None where it says nothing), for `resolve_settings`."""
+    return {setting.name: getattr(args, setting.name) for setting in SETTINGS}
+
+
+def values(resolved: dict[str, Resolved]) -> dict[str, Any]:
+    """The values of resolved settings, by name."""
+    return {name: setting.value for name, setting in resolved.items()}
+
+
+def _sim_config_fallback(resolved: dict[str, Resolved]) -> dict[str, Resolved]:
+    """The default sim_config/ is the working directory's; where there is none, the package's own."""
+    from airsim_mapper.resources import package_sim_config
+
+    current = resolved["simconfigpath"]
+    if current.source != DEFAULT or Path(current.value).is_dir():
+        return resolved
+    shipped = package_sim_config()
+    if shipped is None:
+        return resolved
+    why = f"default: ./{DEFAULT_SIM_CONFIG} does not exist here, so the package's own"
+    return {**resolved, "simconfigpath": Resolved(str(shipped), why)}

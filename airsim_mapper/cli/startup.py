@@ -1,0 +1,144 @@
+"""The node's start-up and stop: connecting with backoff, the start-up thread, the signal handler.
+
+Start-up (connecting, making the wrapper, loading the start scene) runs on a thread of its own, so the
+main thread always sees a signal. A simulator that is not running yet is waited for (one log line per
+attempt; backoff 0.5 s, then 2 s, then 5 s); a port that accepts the connection but never answers is not
+(SimSilent). The first SIGINT or SIGTERM asks the node to stop and arms a deadline; a second exits at once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable
+from functools import partial
+from typing import TYPE_CHECKING, Any
+
+from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
+from airsim_mapper.errors import ConfigError
+
+if TYPE_CHECKING:
+    from airsim_mapper.mapping.pipeline import Prepared
+
+__all__ = ["StartUp", "Stopper", "connect"]
+
+log = logging.getLogger("rosout.airsim_mapper.node")
+
+
+class Stopper:
+    """The node's signal handler: the first signal asks the main loop to stop and arms a deadline after
+    which the process exits anyway (status 1); a second signal exits at once (status 128 + signal)."""
+
+    def __init__(self, timeout: float) -> None:
+        self.timeout = timeout
+        self.signals: list[int] = []
+
+    def __call__(self, number: int, _frame: Any) -> None:
+        if self.signals:
+            _say_and_exit(f"second signal ({signal.Signals(number).name}): exiting at once", 128 + number)
+        self.signals.append(number)
+        deadline = threading.Timer(self.timeout, self._overdue)
+        deadline.daemon = True
+        deadline.start()
+
+    def _overdue(self) -> None:
+        _say_and_exit(f"shutdown took longer than {self.timeout:g} s (--shutdown-timeout): exiting", 1)
+
+    def __bool__(self) -> bool:
+        return bool(self.signals)
+
+
+def _say_and_exit(message: str, status: int) -> None:
+    """Exit now, without running more Python: the message goes straight to stderr."""
+    with contextlib.suppress(OSError):
+        os.write(2, f"[projectairsim_node] {message}\n".encode())
+    os._exit(status)
+
+
+def connect(
+    address: str,
+    topicsport: int,
+    servicesport: int,
+    is_shutdown: Callable[[], bool],
+    sleep: Callable[[float], Any] | None = None,
+) -> Any:
+    """Connect to the simulator, retrying with backoff while nothing listens, until it answers or ROS shuts
+    down (then None). SimSilent (the ports are held but nothing answers) is raised, not retried."""
+    sleep = sleep or time.sleep
+    backoff = Backoff()
+    while not is_shutdown():
+        try:
+            client = open_client(address, topicsport, servicesport)
+        except SimSilent:
+            raise
+        except SimUnreachable as exc:
+            delay = backoff.next_delay()
+            log.warning("%s; waiting for it: attempt %d, next in %.1f s", exc, backoff.attempt, delay)
+            sleep(delay)
+            continue
+        if backoff.attempt:
+            log.info("simulator at %s:%d/%d answered", address, topicsport, servicesport)
+        return client
+    return None
+
+
+class StartUp:
+    """The node's start-up on a thread of its own: connect, make the wrapper, load the start scene.
+
+    The main thread only waits for it, so a signal is seen at once even while a connect or a scene load
+    is blocked in the simulator client. `failure` is the message to print (exit status 1)."""
+
+    def __init__(
+        self,
+        args: argparse.Namespace,
+        settings: dict[str, Any],
+        prepared: Prepared,
+        stopping: Callable[[], bool],
+    ) -> None:
+        self.args, self.settings, self.prepared, self.stopping = args, settings, prepared, stopping
+        self.wrapper: Any = None
+        self.failure = ""
+
+    def run(self) -> None:
+        try:
+            self.failure = self._run()
+        except Exception as exc:  # never leave the main thread waiting: say what happened
+            self.failure = f"start-up failed: {type(exc).__name__}: {exc}"
+
+    def _run(self) -> str:
+        from airsim_mapper.wrapper import ProjectAirSimWrapper
+
+        args, settings, prepared = self.args, self.settings, self.prepared
+        address, topicsport, servicesport = (settings[k] for k in ("address", "topicsport", "servicesport"))
+        try:
+            client = connect(address, topicsport, servicesport, self.stopping)
+        except SimSilent as exc:
+            return str(exc)
+        if client is None:
+            return ""  # stopped while waiting for the simulator
+        self.wrapper = ProjectAirSimWrapper(
+            client,
+            sim_config_path=settings["simconfigpath"],
+            mapping=prepared.mapping,
+            node_name=prepared.node_name,
+            namespace=prepared.namespace,
+            disconnect_on_shutdown=True,  # this node made the client
+            client_factory=partial(open_client, address, topicsport, servicesport),
+            shutdown_timeout=max(0.5, args.shutdown_timeout - 1.5),  # rospy's own unregistering comes after
+            max_frame_mb=args.max_frame_mb,
+            tune_process=True,  # this process is the bridge's own
+        )
+        if prepared.scene is None:
+            return ""
+        try:
+            self.wrapper.load_scene(prepared.scene, prepared.specs)
+        except ConfigError as exc:
+            return str(exc)
+        except Exception as exc:  # the simulator refused the scene: say why, without a traceback
+            return f"{settings['scene']}: the simulator could not load it: {type(exc).__name__}: {exc}"
+        return ""
