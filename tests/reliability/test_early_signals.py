@@ -28,6 +28,8 @@ def test_a_signal_in_the_first_second_of_start_up_stops_the_node_cleanly(
         except subprocess.TimeoutExpired:
             code = None
         outcomes.append((delay, code, "Traceback" in node.output()))
+        if code != 0 or "Traceback" in node.output():
+            print(f"----- {delay} s:\n{node.output()[-1500:]}")
         launcher.stop(node)
     print(f"{signal.Signals(sig).name}: (delay s, exit status, traceback) {outcomes}")
     assert all(code == 0 and not traceback for _, code, traceback in outcomes), outcomes

@@ -91,7 +91,8 @@ def test_after_a_scene_reload_restarts_the_clock_a_goal_in_the_robots_frame_uses
     finally:
         view.close()
     print(f"home {home}, after a goal 1 m ahead: {where}")
-    assert abs(where[0] - (home[0] + 1.0)) < 0.3, "the goal was computed from the old scene's transform"
+    # the probe publishes its goal three times: each goes 1 m ahead of where the robot is then
+    assert home[0] + 0.7 <= where[0] <= home[0] + 3.3, "the goal was computed from the old scene's transform"
     log = node.output()
-    assert log.count("TF_OLD_DATA") < 20
+    assert log.count("TF_OLD_DATA") < 20  # before: about 2,000 a second until the new time passed the old
     assert log.count("tf buffer cleared") >= 1
