@@ -46,7 +46,6 @@ __all__ = ["SETTINGS", "SettingError", "connect", "given_settings", "main", "par
 __all__ += ["run", "values"]
 
 log = logging.getLogger("rosout.airsim_mapper.node")
-EARLY_DEADLINE_S = 10.0  # a signal's deadline before --shutdown-timeout is read
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -164,9 +163,10 @@ def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
 
 def main(argv: list[str] | None = None, early_signals: list[int] | None = None) -> int:
     """The node; `early_signals` are those the script noted while it was importing this module."""
-    # First of all, a signal only raises the node's flag, which every step below checks: before, one in the
-    # first second (imports, the mapping, init_node) ended in a traceback or the default action.
-    stop = Stopper(EARLY_DEADLINE_S)
+    # First of all: until the node registers, a signal exits at once (reading the scene may take seconds on
+    # a busy machine), and from then on it only raises the flag that every step below checks. Before, one
+    # in the first second (imports, the mapping, init_node) ended in a traceback or the default action.
+    stop = Stopper(0.0, at_once=True)  # its deadline, --shutdown-timeout, is read before it can matter
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, stop)
     for number in early_signals or ():
@@ -184,8 +184,6 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     early_settings = values(resolve_settings(given))
     early_namespace = resolve_namespace(early_settings["namespace"], node_namespace)
     early, problem = config_problem(early_settings, node_name, early_namespace)
-    if stop:
-        return 0
     if problem:
         print(problem, file=sys.stderr)
         return 1
@@ -193,6 +191,7 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     # rospy runs its shutdown hooks inside its signal handler, on whatever the main thread was doing: a
     # SIGINT during a service registration ran the engine's shutdown while the registration lock was held,
     # and the node hung (seen in CI). Here the handler only raises a flag; the hooks run from the loop below.
+    stop.at_once = False  # rospy.init_node registers the node: a signal from now on shuts it down in order
     rospy.init_node(node_name, disable_signals=True)
     try:
         resolved = resolve_settings(given, rospy.get_param)  # KeyError when unset
