@@ -62,5 +62,5 @@ def test_two_hundred_mapping_reloads_leak_no_files_threads_or_memory(
     assert "restarted" in node.output() or "changed" in node.output()
     assert files1 - files0 <= 2, "open files grew with the reloads"
     assert threads1 - threads0 <= 2, "threads grew with the reloads"
-    assert rss1 - rss0 < 10.0, "memory grew with the reloads"
+    assert rss1 - rss0 < 3.0, "memory grew with the reloads"  # before: +6.9 MB, stopped bridges kept frozen
     assert "Traceback" not in node.output()
