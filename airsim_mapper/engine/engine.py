@@ -324,6 +324,7 @@ class Engine:
         log.info("simulation time went back %.3f s: tf buffer cleared, stale filters reset", jump_s)
 
     def _start_over(self) -> None:
+        """Forget the old session's stamps: the streams' newest, and each stale filter's wait."""
         self.hub.forget_stamps()
         for bridge in list(self.bridges.values()):
             if isinstance(bridge, SimToRos):

@@ -71,10 +71,10 @@ class StreamHub:
         return max((s.stats.newest_stamp for s in streams), default=0)
 
     def forget_stamps(self) -> None:
-        """A new simulator session: the old session's newest stamps no longer say what is stale."""
-        with self._lock:
-            for stream in self._streams.values():
-                stream.stats.newest_stamp = 0
+        """A new simulator session: the old session's newest stamps no longer say what is stale. Called
+        from the receive thread, so it takes no lock (`rebind` holds the hub's while it subscribes)."""
+        for stream in list(self._streams.values()):
+            stream.stats.newest_stamp = 0
 
     def streams(self) -> dict[str, Stream]:
         with self._lock:
