@@ -33,7 +33,8 @@ class RateLimitedLog:
         self._held = 0
         self._lock = threading.Lock()
 
-    def warn(self, message: str) -> None:
+    def warn(self, message: str, exc_info: BaseException | None = None) -> None:
+        """Log `message` (with `exc_info`'s traceback, if given) unless this period's budget is spent."""
         with self._lock:
             now = time.monotonic()
             if now - self._window_start >= self.period:
@@ -44,7 +45,7 @@ class RateLimitedLog:
             self._logged += 1
             held, self._held = self._held, 0
         suffix = f" ({held} more not logged before this one)" if held else ""
-        self.logger.log(self.level, "%s%s%s", self.prefix, message, suffix)
+        self.logger.log(self.level, "%s%s%s", self.prefix, message, suffix, exc_info=exc_info)
 
 
 def shorten(text: str, keep: int = SHOWN_NAME) -> str:

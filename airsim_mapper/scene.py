@@ -22,7 +22,7 @@ from typing import Any
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.files import ConfigFileError, read_config_text
 
-_CLIENT_READS = threading.Lock()
+_CLIENT_READS = threading.Lock()  # guards every patch of the client's module state (see _client_patched)
 SCENE_SCHEMA = "schema/scene_config_schema.jsonc"
 ROBOT_SCHEMA = "schema/robot_config_schema.jsonc"
 
@@ -163,9 +163,20 @@ def _schema_json(get_schema: Callable[[str], Any], text: str) -> str:
 
 def _schema(resource: str) -> dict[str, Any]:
     """The client's packaged schema `resource`, as a fresh dict."""
-    from projectairsim.utils import get_schema, load_text_resource
+    import projectairsim.utils as client_utils
 
+    with _CLIENT_READS:  # the client's own get_schema, never a reader's patch of it
+        get_schema, load_text_resource = client_utils.get_schema, client_utils.load_text_resource
     return json.loads(_schema_json(get_schema, load_text_resource(resource)))
+
+
+@contextlib.contextmanager
+def _client_patched() -> Iterator[None]:
+    """The client's loader with its schemas cached, its file reads checked and its logger quiet: every
+    patch of the client's module state is made and undone under the one lock, so two readers never see
+    each other's patches (nor a half-undone one)."""
+    with _CLIENT_READS, _quiet_client_log(), _fast_client_schemas(), _checked_client_reads():
+        yield
 
 
 @contextlib.contextmanager
@@ -197,12 +208,11 @@ def _checked_client_reads() -> Iterator[None]:
         except ConfigFileError as err:
             raise SceneConfigError.single(err.file, err.about("config file"), err.line, err.column) from None
 
-    with _CLIENT_READS:  # one reader at a time owns the patch
-        client_utils.open = checked_open
-        try:
-            yield
-        finally:
-            del client_utils.open
+    client_utils.open = checked_open  # under _client_patched's lock
+    try:
+        yield
+    finally:
+        del client_utils.open
 
 
 def _precheck(root: Path, path: Path) -> dict[str, Any]:
@@ -265,7 +275,7 @@ def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
     from projectairsim.utils import load_scene_config_as_dict
 
     try:
-        with _quiet_client_log(), _fast_client_schemas(), _checked_client_reads():
+        with _client_patched():
             data, _ = load_scene_config_as_dict(str(PurePath(scene_file)), str(root) + "/")
     except SceneConfigError:
         raise

@@ -7,12 +7,14 @@ engine/ros_link.RosLink), so the engine runs in-process without a simulator or a
 from __future__ import annotations
 
 import concurrent.futures
+import json
 import threading
 import types
 from dataclasses import dataclass, field
 from typing import Any
 
 import genpy
+from harness import SIM_CONFIG
 
 from airsim_mapper.engine.ros_link import ClosedEndpoint, FrameUnknown, message_class
 
@@ -30,7 +32,7 @@ def fake_client() -> Any:
 
 
 @dataclass
-class FakeSim:
+class FakeSimLink:
     """The simulator link: every call answers `result`; topics are delivered by `deliver`."""
 
     client: Any = None
@@ -163,12 +165,14 @@ class FakeRos:
     closed: bool = False
     tf_cleared: int = 0  # forget_tf calls
     refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
+    made: list[FakePublisher] = field(default_factory=list)  # every publisher ever made, in order
 
     def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
         message_class(ros_type)  # the type must exist, as rospy would require
         if name in self.refused:
             raise ValueError(f"{name} is already advertised with another type")
         self.publishers[name] = FakePublisher(name, ros_type, latch, on_peers)
+        self.made.append(self.publishers[name])
         return self.publishers[name]
 
     def subscriber(self, name: str, ros_type: str, callback: Any, *, queue_size: int) -> FakeEndpoint:
@@ -195,3 +199,38 @@ class FakeRos:
 
     def close(self) -> None:
         self.closed = True
+
+
+class EngineRig:
+    """An engine whose every simulator link and world load is recorded."""
+
+    def __init__(self, reconnect: bool = True, mapping: Any = None) -> None:
+        from airsim_mapper.engine.engine import Engine
+        from airsim_mapper.mapping.loader import load_mapping
+
+        self.links: list[FakeSimLink] = []
+        self.worlds: list[str] = []
+        self.ros = FakeRos()
+        self.engine = Engine(
+            fake_client(),
+            mapping or load_mapping("default"),
+            SIM_CONFIG,
+            "node",
+            load_world=self._load_world,
+            client_factory=fake_client if reconnect else None,
+            ros=self.ros,
+            link=self._link,
+        )
+
+    def _link(self, client, counts) -> FakeSimLink:
+        self.links.append(FakeSimLink(client, counts))
+        return self.links[-1]
+
+    def _load_world(self, client, scene, _path) -> str:
+        self.worlds.append(scene.file)
+        return f"world of {scene.file}"
+
+    def statuses(self) -> list[dict]:
+        from airsim_mapper.engine.status import status_topic
+
+        return [json.loads(m.data) for m in self.ros.publishers[status_topic("node")].messages]

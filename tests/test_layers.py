@@ -1,15 +1,20 @@
 """The package's layers, checked by reading every import (module level and inside functions) with `ast`.
 
+The layers, top to bottom (`LAYERS`): cli; wrapper; engine; mapping (with scene.py); convert and
+simserver, peers that never import each other; the leaf modules. A module imports only its own layer (its
+own group of it) or a lower one. Every module of the package is in exactly one layer. Besides:
 - mapping/ and scene.py run without ROS: nothing they import, directly or through other modules of the
   package, is rospy, genpy, a message package or another ROS library;
-- convert/ imports neither the engine, nor the mapping layer, nor rospy;
-- simserver/ imports only itself and the shared leaf modules;
-- nothing in the package imports the tools.
+- convert/ does not import rospy (message classes and genpy.Time only);
+- nothing in the package imports the tools;
+- the package's run-time imports (those outside `if TYPE_CHECKING:`) have no circle.
+Each rule has a self-test: an import injected against it is reported.
 """
 
 from __future__ import annotations
 
 import ast
+import itertools
 from collections.abc import Iterable
 from functools import cache
 from pathlib import Path
@@ -17,17 +22,29 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "airsim_mapper"
-LEAVES = frozenset(
-    {
-        "airsim_mapper.errors",
-        "airsim_mapper.geometry",
-        "airsim_mapper.image_types",
-        "airsim_mapper.logs",
-        "airsim_mapper.ports",
-        "airsim_mapper.ros_types",
-        "airsim_mapper.tuning",
-    }
+# Top to bottom; each layer a tuple of groups (peers), each group the module prefixes it holds.
+LAYERS: tuple[tuple[tuple[str, ...], ...], ...] = (
+    (("airsim_mapper.cli",),),
+    (("airsim_mapper.wrapper",),),
+    (("airsim_mapper.engine",),),
+    (("airsim_mapper.mapping", "airsim_mapper.scene"),),
+    (("airsim_mapper.convert", "airsim_mapper.rviz_radar"), ("airsim_mapper.simserver",)),
+    (
+        (
+            "airsim_mapper.errors",
+            "airsim_mapper.files",
+            "airsim_mapper.geometry",
+            "airsim_mapper.image_types",
+            "airsim_mapper.logs",
+            "airsim_mapper.ports",
+            "airsim_mapper.resources",
+            "airsim_mapper.ros_types",
+            "airsim_mapper.tuning",
+        ),
+    ),
 )
+PACKAGE_ROOT = "airsim_mapper"  # its __init__ holds the version only: below every layer
+LEAVES = frozenset(LAYERS[-1][0])
 ROS_LIBRARIES = frozenset({"rospy", "genpy", "roslib", "rosgraph", "tf2_ros", "tf2_py", "message_filters"})
 
 
@@ -36,10 +53,25 @@ def module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imported(source: str, module: str) -> set[str]:
-    """Every module `source` imports, relative imports made absolute (`from a import b` counts a and a.b)."""
+def _type_checking(node: ast.AST) -> bool:
+    test = getattr(node, "test", None)
+    return isinstance(node, ast.If) and (
+        (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING")
+        or (isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+    )
+
+
+def imported(source: str, module: str, run_time_only: bool = False) -> set[str]:
+    """Every module `source` imports, relative imports made absolute (`from a import b` counts a and a.b);
+    with `run_time_only`, not those under `if TYPE_CHECKING:`."""
     found: set[str] = set()
-    for node in ast.walk(ast.parse(source)):
+    todo: list[ast.AST] = [ast.parse(source)]
+    while todo:
+        node = todo.pop()
+        if run_time_only and _type_checking(node):
+            todo.extend(node.orelse)
+            continue
+        todo.extend(ast.iter_child_nodes(node))
         if isinstance(node, ast.Import):
             found.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -53,17 +85,19 @@ def imported(source: str, module: str) -> set[str]:
 
 
 @cache
-def parsed_package() -> dict[str, frozenset[str]]:
+def parsed_package(run_time_only: bool = False) -> dict[str, frozenset[str]]:
     """Module -> the modules it imports, for every module of the package (read once per run)."""
     return {
-        module_name(path): frozenset(imported(path.read_text(encoding="utf-8"), module_name(path)))
+        module_name(path): frozenset(
+            imported(path.read_text(encoding="utf-8"), module_name(path), run_time_only)
+        )
         for path in PACKAGE.rglob("*.py")
     }
 
 
-def package_graph() -> dict[str, set[str]]:
+def package_graph(run_time_only: bool = False) -> dict[str, set[str]]:
     """A copy of the package's import graph that a test may change."""
-    return {module: set(targets) for module, targets in parsed_package().items()}
+    return {module: set(targets) for module, targets in parsed_package(run_time_only).items()}
 
 
 def reachable(graph: dict[str, set[str]], start: Iterable[str]) -> set[str]:
@@ -87,6 +121,30 @@ def in_layer(name: str, *layers: str) -> bool:
     return any(name == layer or name.startswith(f"{layer}.") for layer in layers)
 
 
+def place(name: str) -> tuple[int, int] | None:
+    """(layer, group) of a package module (a module imported as `pkg.name` counts as `pkg`'s); None for
+    the package root and for anything outside the package."""
+    for rank, groups in enumerate(LAYERS):
+        for group, prefixes in enumerate(groups):
+            if in_layer(name, *prefixes):
+                return rank, group
+    return None
+
+
+def layer_problems(graph: dict[str, set[str]]) -> list[str]:
+    """Imports of a higher layer, or of a peer group of the same layer."""
+    problems = []
+    for module, targets in graph.items():
+        home = place(module)
+        for target in targets:
+            there = place(target)
+            if home is None or there is None or there == home:
+                continue
+            if there[0] <= home[0]:  # upward, or a peer's
+                problems.append(f"{module} imports {target}")
+    return sorted(problems)
+
+
 def ros_free_problems(graph: dict[str, set[str]]) -> list[str]:
     roots = [name for name in graph if in_layer(name, "airsim_mapper.mapping", "airsim_mapper.scene")]
     return sorted(
@@ -98,25 +156,12 @@ def ros_free_problems(graph: dict[str, set[str]]) -> list[str]:
 
 
 def convert_problems(graph: dict[str, set[str]]) -> list[str]:
-    forbidden = ("airsim_mapper.engine", "airsim_mapper.mapping", "rospy")
     return sorted(
         f"{module} imports {target}"
         for module, targets in graph.items()
         if in_layer(module, "airsim_mapper.convert")
         for target in targets
-        if in_layer(target, *forbidden)
-    )
-
-
-def simserver_problems(graph: dict[str, set[str]]) -> list[str]:
-    return sorted(
-        f"{module} imports {target}"
-        for module, targets in graph.items()
-        if in_layer(module, "airsim_mapper.simserver")
-        for target in targets
-        if in_layer(target, "airsim_mapper")
-        and not in_layer(target, "airsim_mapper.simserver", *LEAVES)
-        and target != "airsim_mapper"
+        if in_layer(target, "rospy")
     )
 
 
@@ -124,10 +169,43 @@ def tools_problems(graph: dict[str, set[str]]) -> list[str]:
     return sorted(f"{module} imports {t}" for module, ts in graph.items() for t in ts if in_layer(t, "tools"))
 
 
+def circles(graph: dict[str, set[str]]) -> list[str]:
+    """Each import circle among the package's modules, as `a -> b -> a` (Tarjan's strongly connected
+    components of more than one module, or one importing itself)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[str] = []
+
+    def visit(name: str) -> None:
+        index[name] = low[name] = len(index)
+        stack.append(name)
+        for target in sorted(t for t in graph[name] if t in graph):
+            if target not in index:
+                visit(target)
+                low[name] = min(low[name], low[target])
+            elif target in stack:
+                low[name] = min(low[name], index[target])
+        if low[name] == index[name]:
+            component = []
+            while True:
+                member = stack.pop()
+                component.append(member)
+                if member == name:
+                    break
+            if len(component) > 1 or name in graph[name]:
+                found.append(" -> ".join([*sorted(component), sorted(component)[0]]))
+
+    for name in sorted(graph):
+        if name not in index:
+            visit(name)
+    return sorted(found)
+
+
 RULES = {
+    "a module imports only its own layer or a lower one": layer_problems,
     "mapping and scene run without ROS": ros_free_problems,
-    "convert stands apart from engine, mapping and rospy": convert_problems,
-    "simserver uses only itself and the leaf modules": simserver_problems,
+    "convert does not import rospy": convert_problems,
     "the package never imports the tools": tools_problems,
 }
 
@@ -135,6 +213,40 @@ RULES = {
 @pytest.mark.parametrize("rule", RULES)
 def test_the_package_keeps_its_layers(rule: str) -> None:
     assert RULES[rule](package_graph()) == []
+
+
+def test_every_module_is_in_exactly_one_layer() -> None:
+    unplaced = [name for name in parsed_package() if name != PACKAGE_ROOT and place(name) is None]
+    assert unplaced == [], "add these modules to a layer of LAYERS"
+    prefixes = [prefix for groups in LAYERS for group in groups for prefix in group]
+    assert len(prefixes) == len(set(prefixes))
+
+
+def test_the_run_time_imports_have_no_circle() -> None:
+    assert circles(package_graph(run_time_only=True)) == []
+
+
+def representative(rank: int, group: int) -> str:
+    """A module of the package in that layer's group (the first by name)."""
+    return min(name for name in parsed_package() if place(name) == (rank, group))
+
+
+GROUPS = [(rank, group) for rank, groups in enumerate(LAYERS) for group in range(len(groups))]
+FORBIDDEN = [(low, high) for low, high in itertools.permutations(GROUPS, 2) if high[0] <= low[0]]
+
+
+@pytest.mark.parametrize(("low", "high"), FORBIDDEN, ids=lambda g: f"{LAYERS[g[0]][g[1]][0]}")
+def test_an_import_of_a_higher_layer_or_a_peer_is_reported_for_each_pair(low, high) -> None:
+    graph = package_graph()
+    module, target = representative(*low), representative(*high)
+    graph[module] = graph[module] | imported(f"def later():\n    import {target}", module)
+    assert f"{module} imports {target}" in layer_problems(graph)
+
+
+def test_an_import_of_a_lower_layer_or_of_its_own_group_is_allowed() -> None:
+    graph = package_graph()
+    graph["airsim_mapper.engine.hub"] |= {"airsim_mapper.convert.frames", "airsim_mapper.engine.streams"}
+    assert layer_problems(graph) == []
 
 
 @pytest.mark.parametrize(
@@ -147,16 +259,10 @@ def test_the_package_keeps_its_layers(rule: str) -> None:
             "airsim_mapper.convert.catalog imports std_msgs.msg",
         ),
         (
-            "convert stands apart from engine, mapping and rospy",
+            "convert does not import rospy",
             "airsim_mapper.convert.pose",
-            "def later():\n    from ..mapping import template",
-            "airsim_mapper.convert.pose imports airsim_mapper.mapping",
-        ),
-        (
-            "simserver uses only itself and the leaf modules",
-            "airsim_mapper.simserver.world",
-            "from airsim_mapper.convert.frames import ned_to_enu",
-            "airsim_mapper.simserver.world imports airsim_mapper.convert.frames",
+            "def later():\n    import rospy",
+            "airsim_mapper.convert.pose imports rospy",
         ),
         (
             "the package never imports the tools",
@@ -172,3 +278,59 @@ def test_each_rule_reports_a_forbidden_import(rule: str, module: str, source: st
     if rule == "mapping and scene run without ROS":  # a forbidden import two modules away
         graph["airsim_mapper.convert.catalog"] = graph["airsim_mapper.convert.catalog"] | {"std_msgs.msg"}
     assert problem in RULES[rule](graph)
+
+
+def test_a_circle_is_reported_and_type_checking_imports_are_not_run_time_ones() -> None:
+    graph = package_graph(run_time_only=True)
+    graph["airsim_mapper.engine.hub"] |= {"airsim_mapper.engine.engine"}
+    assert any(c.startswith("airsim_mapper.engine.") and "engine.hub" in c for c in circles(graph))
+    source = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from a import b\nelse:\n    import c\n"
+    assert imported(source, "m", run_time_only=True) == {"typing", "typing.TYPE_CHECKING", "c"}
+    assert {"a", "a.b", "c"} <= imported(source, "m")
+
+
+FACES = ("airsim_mapper.cli", "airsim_mapper.convert", "airsim_mapper.engine", "airsim_mapper.mapping")
+
+
+def face(package: str) -> frozenset[str]:
+    """The modules a subpackage's `__init__` names in `__all__`."""
+    source = (PACKAGE.parent / package.replace(".", "/") / "__init__.py").read_text(encoding="utf-8")
+    for node in ast.parse(source).body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets):
+            return frozenset(ast.literal_eval(node.value))
+    return frozenset()
+
+
+def face_problems(graph: dict[str, set[str]]) -> list[str]:
+    """Imports from outside a subpackage of a module its `__all__` does not name."""
+    problems = []
+    for package in FACES:
+        allowed = face(package)
+        for module, targets in graph.items():
+            if in_layer(module, package):
+                continue
+            problems.extend(
+                f"{module} imports {target}, not in {package}.__all__"
+                for target in targets
+                if in_layer(target, package)
+                and target != package
+                and target[len(package) + 1 :].split(".")[0] not in allowed
+            )
+    return sorted(problems)
+
+
+@pytest.mark.parametrize("package", FACES)
+def test_each_subpackage_names_its_face_and_every_outside_import_uses_it(package: str) -> None:
+    names = face(package)
+    assert names, f"{package}/__init__.py has no __all__"
+    modules = {name.rsplit(".", 1)[-1] for name in parsed_package() if name.startswith(f"{package}.")}
+    assert sorted(names - modules) == [], "__all__ names modules that do not exist"
+    assert [p for p in face_problems(package_graph()) if f"not in {package}." in p] == []
+
+
+def test_an_import_behind_a_subpackages_face_is_reported() -> None:
+    graph = package_graph()
+    graph["airsim_mapper.wrapper"] |= {"airsim_mapper.engine.streams"}
+    assert face_problems(graph) == [
+        "airsim_mapper.wrapper imports airsim_mapper.engine.streams, not in airsim_mapper.engine.__all__"
+    ]

@@ -10,16 +10,22 @@ Contract of an implementation (see registry.py):
 Converters raise ``ConversionError`` (airsim_mapper.convert.errors) for malformed input, nothing else.
 
 Each entry also says how the engine runs the converter (`runner`, engine/bridges.py) and what follows a
-successful simulator call (`after`), so the engine never tests converter names.
+successful simulator call (`after`), so the engine never tests converter names, and carries an example
+message (`example`) that the property tests convert and then damage in every way they can.
 
-`markdown_table` renders the catalogue for people: `airsim-mapper converters` prints it, and
-`docs/converters.md` is that output (a test keeps the two equal).
+The catalogue is the one source of the converters' names: the mapping schema's `converter` enum and the
+table in `docs/converters.md` are generated from it (`python -m tools.catalogue`), and tests name any entry
+either lacks. `markdown_table` renders the catalogue for people (`airsim-mapper converters` prints it).
+
+Over 400 lines on purpose: it is one table, an entry of about a dozen lines per converter, and reads
+better whole than split.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
 
 SIM_TO_ROS = "sim_to_ros"
 ROS_TO_SIM = "ros_to_sim"
@@ -40,6 +46,15 @@ ACTIONS = ("load_scene",)
 
 
 @dataclass(frozen=True)
+class Example:
+    """A message the converter turns into a result, and the rule parameters and scene element it needs."""
+
+    message: Mapping[str, Any]  # sim -> ROS: the simulator message; ROS -> sim: the ROS message's fields
+    params: Mapping[str, Any] = field(default_factory=dict)  # the rule's params
+    source: Mapping[str, Any] = field(default_factory=dict)  # the scene element (robot actor, sensor, ...)
+
+
+@dataclass(frozen=True)
 class ConverterInfo:
     name: str
     direction: str  # SIM_TO_ROS or ROS_TO_SIM
@@ -50,6 +65,8 @@ class ConverterInfo:
     summary: str
     after: str | None = None  # one of AFTER_HOOKS
     action: str | None = None  # one of ACTIONS (runner ACTION)
+    example: Example | None = None  # what the property tests start from (every entry has one)
+    max_pixels: bool = False  # takes the rule's params.max_pixels and params.max_bytes (images)
 
     @property
     def sim_kind(self) -> str:
@@ -57,10 +74,22 @@ class ConverterInfo:
         return SIM_KINDS.get(self.runner, "node")
 
 
-def _c(
-    name, direction, ros_types, runner, module, function, summary, after=None, action=None
-) -> ConverterInfo:
-    return ConverterInfo(name, direction, tuple(ros_types), runner, module, function, summary, after, action)
+def _c(name, direction, ros_types, runner, module, function, summary, **more: Any) -> ConverterInfo:
+    return ConverterInfo(name, direction, tuple(ros_types), runner, module, function, summary, **more)
+
+
+def _e(message: Mapping[str, Any], **context: Any) -> Example:
+    return Example(message, **context)
+
+
+STAMP = {"time_stamp": 1}
+POSE = {"position": {"x": 1.0, "y": 2.0, "z": 3.0}, "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}}
+ORIGIN = {"xyz": "1 2 -3", "rpy-deg": "0 0 90"}  # a robot actor's origin in a scene
+# a 1x1 PNG of one black pixel, as the simulator sends a compressed colour image
+PNG_1X1 = bytes.fromhex(
+    "89504e470d0a1a0a0000000d4948445200000001000000010802000000907753de"
+    "0000000a49444154081d63000200000400010d3ba4b90000000049454e44ae426082"
+)
 
 
 CONVERTERS: dict[str, ConverterInfo] = {
@@ -75,6 +104,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "pose_stamped",
             "sim PoseStamped (robot actual_pose) -> PoseStamped; with tf, also the robot's transform",
+            example=_e({**STAMP, **POSE}),
         ),
         _c(
             "camera_pose",
@@ -84,6 +114,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "camera_pose",
             "robot actual_pose composed with the camera mount (and any camera pose command) -> camera pose",
+            example=_e({**STAMP, **POSE}),
         ),
         _c(
             "sensor_pose",
@@ -93,6 +124,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "sensor_pose",
             "robot actual_pose composed with a sensor's config origin (lidar, radar, distance) -> its pose",
+            example=_e({**STAMP, **POSE}),
         ),
         _c(
             "camera_optical_pose",
@@ -102,6 +134,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "camera_optical_pose",
             "as camera_pose, turned into the optical frame (z forward, x right, y down) for image frames",
+            example=_e({**STAMP, **POSE}),
         ),
         _c(
             "odometry",
@@ -111,6 +144,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "odometry",
             "odometry",
             "robot actual_pose -> Odometry; body-frame twist from successive poses (state in ctx.shared)",
+            example=_e({**STAMP, **POSE}),
         ),
         _c(
             "collision",
@@ -120,6 +154,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "collision",
             "collision",
             "sim CollisionInfo -> PointStamped of the impact point (world frame)",
+            example=_e({**STAMP, "object_name": "x", "impact_point": {"x": 1.0, "y": 2.0, "z": 3.0}}),
         ),
         _c(
             "image",
@@ -129,6 +164,20 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "image",
             "image",
             "sim Image (BGR, PNG, 16FC1, 16UC1, GRAY8) -> Image (bgr8, 32FC1 metres, mono8)",
+            example=_e({**STAMP, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)}),
+            max_pixels=True,
+        ),
+        _c(
+            "compressed_image",
+            SIM_TO_ROS,
+            ["sensor_msgs/CompressedImage"],
+            PUBLISH,
+            "compressed_image",
+            "compressed_image",
+            "sim Image sent as PNG (capture setting compress: true) -> CompressedImage of those bytes, "
+            "format 'bgr8; png compressed bgr8' (image_transport's compressed transport)",
+            example=_e({**STAMP, "width": 1, "height": 1, "encoding": "PNG", "data": PNG_1X1}),
+            max_pixels=True,
         ),
         _c(
             "camera_info",
@@ -138,6 +187,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "camera_info",
             "camera_info",
             "sim Image (for its size and stamp) + capture settings -> CameraInfo (plumb_bob, K, P from fov)",
+            example=_e({**STAMP, "width": 2, "height": 1}),
         ),
         _c(
             "pointcloud",
@@ -147,6 +197,14 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pointcloud",
             "pointcloud",
             "sim Lidar -> PointCloud2 with x, y, z, intensity, segmentation",
+            example=_e(
+                {
+                    **STAMP,
+                    "point_cloud": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+                    "intensity_cloud": [0.5, 0.25],
+                    "segmentation_cloud": [1, 2],
+                }
+            ),
         ),
         _c(
             "radar_scan",
@@ -156,6 +214,14 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "radar",
             "radar_scan",
             "sim RadarDetection -> RadarScan (range, azimuth, elevation, doppler, amplitude dB from rcs)",
+            example=_e(
+                {
+                    **STAMP,
+                    "radar_detections": [
+                        {"range": 1.0, "azimuth": 0.1, "elevation": 0.0, "velocity": 0.0, "rcs_sqm": 1.0}
+                    ],
+                }
+            ),
         ),
         _c(
             "radar_tracks",
@@ -165,6 +231,19 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "radar",
             "radar_tracks",
             "sim RadarTrack -> RadarTracks (uuid from id, position, velocity, acceleration)",
+            example=_e(
+                {
+                    **STAMP,
+                    "radar_tracks": [
+                        {
+                            "id": 3,
+                            "position_est": {"x": 1.0, "y": 0.0, "z": 0.0},
+                            "velocity_est": {"x": 0.0, "y": 0.0, "z": 0.0},
+                            "accel_est": {"x": 0.0, "y": 0.0, "z": 0.0},
+                        }
+                    ],
+                }
+            ),
         ),
         _c(
             "clock",
@@ -174,8 +253,25 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "clock",
             "clock",
             "any stamped sim message -> Clock at its sim time",
+            example=_e(STAMP),
         ),
-        _c("imu", SIM_TO_ROS, ["sensor_msgs/Imu"], PUBLISH, "instruments", "imu", "sim IMU -> Imu"),
+        _c(
+            "imu",
+            SIM_TO_ROS,
+            ["sensor_msgs/Imu"],
+            PUBLISH,
+            "instruments",
+            "imu",
+            "sim IMU -> Imu",
+            example=_e(
+                {
+                    **STAMP,
+                    "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+                    "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.0},
+                    "linear_acceleration": {"x": 0.0, "y": 0.0, "z": -9.8},
+                }
+            ),
+        ),
         _c(
             "gps",
             SIM_TO_ROS,
@@ -184,6 +280,17 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "gps",
             "sim GPS -> NavSatFix",
+            example=_e(
+                {
+                    **STAMP,
+                    "latitude": 47.6,
+                    "longitude": -122.1,
+                    "altitude": 100.0,
+                    "fix_type": 3,
+                    "eph": 1.0,
+                    "epv": 2.0,
+                }
+            ),
         ),
         _c(
             "barometer",
@@ -193,6 +300,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "barometer",
             "sim Barometer -> FluidPressure (Pa)",
+            example=_e({**STAMP, "pressure": 101325.0}),
         ),
         _c(
             "magnetometer",
@@ -202,6 +310,13 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "magnetometer",
             "sim Magnetometer (gauss) -> MagneticField (tesla)",
+            example=_e(
+                {
+                    **STAMP,
+                    "magnetic_field_body": {"x": 0.2, "y": 0.0, "z": 0.4},
+                    "magnetic_field_covariance": [0.0] * 9,
+                }
+            ),
         ),
         _c(
             "distance",
@@ -211,6 +326,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "distance",
             "sim DistanceSensor -> Range",
+            example=_e({**STAMP, "current_distance": 3.0}),
         ),
         _c(
             "battery",
@@ -220,6 +336,9 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "battery",
             "sim Battery -> BatteryState",
+            example=_e(
+                {**STAMP, "battery_pct_remaining": 50.0, "battery_charge_state": "BATTERY_CHARGE_STATE_OK"}
+            ),
         ),
         _c(
             "airspeed",
@@ -229,6 +348,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "airspeed",
             "sim Airspeed (differential pressure) -> FluidPressure (Pa)",
+            example=_e({**STAMP, "diff_pressure": 3.0}),
         ),
         _c(
             "streaming_image",
@@ -238,6 +358,8 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "image",
             "image",
             "the active streaming camera's scene image (the engine follows switch_view)",
+            example=_e({**STAMP, "width": 1, "height": 1, "encoding": "16FC1", "data": bytes(2)}),
+            max_pixels=True,
         ),
         # --- ROS -> simulator ----------------------------------------------------------------
         _c(
@@ -248,6 +370,9 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "cmd_vel",
             "Twist -> MoveByVelocityBodyFrame (or MoveByVelocity) params, with limits and a watchdog",
+            example=_e(
+                {"linear": {"x": 1.0, "y": 0.0, "z": -0.5}, "angular": {"x": 0.0, "y": 0.0, "z": 0.2}}
+            ),
         ),
         _c(
             "desired_pose",
@@ -257,6 +382,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "desired_pose",
             "PoseStamped -> sim desired_pose message (robot teleport)",
+            example=_e({"pose": POSE}),
         ),
         _c(
             "camera_desired_pose",
@@ -267,6 +393,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "camera_desired_pose",
             "PoseStamped -> camera SetPose params with wait_for_pose_update",
             after="remember_camera_pose",
+            example=_e({"pose": POSE}),
         ),
         _c(
             "load_scene",
@@ -277,6 +404,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "load_scene",
             "String scene file name -> the engine loads it from --simconfigpath",
             action="load_scene",
+            example=_e({"data": "scene_basic_drone.jsonc"}),
         ),
         _c(
             "trigger",
@@ -286,6 +414,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "trigger",
             "service request -> sim service call with the rule's fixed params; reply from its result",
+            example=_e({}),
         ),
         _c(
             "reset_pose",
@@ -295,6 +424,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "reset",
             "reset_pose",
             "service request -> robot SetPose params that return it to its scene origin, at rest",
+            example=_e({}, source={"origin": ORIGIN}),
         ),
         _c(
             "trigger_all",
@@ -304,6 +434,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "trigger",
             "Trigger -> the robot method params.method on every robot of the scene (sim: the robots prefix)",
+            example=_e({}),
         ),
         _c(
             "set_bool",
@@ -313,6 +444,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "set_bool",
             "SetBool request -> sim service call with the bool as the rule's param",
+            example=_e({"data": True}, params={"arg": "do_pause"}),
         ),
         _c(
             "switch_view",
@@ -323,6 +455,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "trigger",
             "Trigger -> SwitchStreamingView, and the streaming image follows the next camera",
             after="next_streaming_camera",
+            example=_e({}),
         ),
     )
 }

@@ -22,11 +22,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services, SimToRos, build
+from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services, SimToRos
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import RosLink
+from airsim_mapper.engine.runners import build
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.supervisor import Supervisor

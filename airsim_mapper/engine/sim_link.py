@@ -28,25 +28,27 @@ import concurrent.futures
 import contextlib
 import logging
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from airsim_mapper.engine.errors import EngineError
-from airsim_mapper.engine.fast_frames import decode_map
 from airsim_mapper.engine.health import PROBE_METHOD
+from airsim_mapper.engine.receive import (
+    CURRENT_LINK,
+    RECEIVE_THREAD,
+    close_client,
+    decode_body,
+    receive,
+    take_over,
+    unknown_topic,
+)
 from airsim_mapper.logs import RateLimitedLog
 
 log = logging.getLogger("rosout.airsim_mapper.sim")
 
 TopicCallback = Callable[[Any, Any], None]
-FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
 WARN_PERIOD_S = 5.0
-RECEIVE_THREAD = "sim-receive"
-CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
-TAKE_OVER_WAIT_S = 1.0
-CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
 MAX_FRAME_MB = 64.0  # default cap on one simulator frame (a 4K BGR image is 25 MB)
 MESSAGE_FRAME = 2  # projectairsim.types.FrameType.MESSAGE: the only type a server sends to a client
 
@@ -56,8 +58,9 @@ class FrameCounts:
     """Simulator frames the bridge refused, kept by the engine across reconnects (status, /diagnostics)."""
 
     max_frame_bytes: int = int(MAX_FRAME_MB * 1024 * 1024)
-    bad: int = 0  # undecodable, of an unknown type, or a callback failed
+    bad: int = 0  # undecodable, or of an unknown type
     oversized: int = 0  # over max_frame_bytes, or an image over its pixel bound
+    callback_errors: int = 0  # a callback on the receive thread raised (the frame itself was fine)
 
 
 class SimLinkError(EngineError):
@@ -71,6 +74,45 @@ class SimLinkDead(SimLinkError):
         super().__init__(f"{what}: the simulator connection is lost")
 
 
+class LinkState:
+    """A link's connection state, owned here and changed under its own lock (a leaf lock: nothing else is
+    taken while it is held). NNG's callback thread drops it, the supervisor kills it, shutdown closes it,
+    and every thread that sends asks it first."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._dropped = False  # a connection dropped at least once
+        self._dead = False  # every call fails at once; subscriptions are only remembered
+        self._closing = False  # unsubscribes are collected for `close`
+
+    def drop(self) -> None:
+        with self._lock:
+            self._dropped = True
+
+    def kill(self) -> None:
+        with self._lock:
+            self._dead = True
+
+    def begin_close(self) -> None:
+        with self._lock:
+            self._closing = True
+
+    @property
+    def dead(self) -> bool:
+        with self._lock:
+            return self._dead
+
+    @property
+    def closing(self) -> bool:
+        with self._lock:
+            return self._closing
+
+    def connected(self) -> bool:
+        """Neither dead nor ever dropped, read together."""
+        with self._lock:
+            return not self._dead and not self._dropped
+
+
 class SimLink:
     """Reference-counted topic subscriptions and concurrent service calls on a shared client."""
 
@@ -82,9 +124,7 @@ class SimLink:
         self._loop = asyncio.new_event_loop()
         self._loop_thread = threading.Thread(target=self._run_loop, name="sim-requests", daemon=True)
         self._loop_thread.start()
-        self.dropped = threading.Event()  # a connection dropped at least once
-        self.dead = False
-        self._closing = False
+        self.connection = LinkState()  # dropped, dead, closing: one lock of its own
         self._pending: set[str] = set()  # topics to unsubscribe when closing
         self._watched = [
             sock
@@ -115,7 +155,7 @@ class SimLink:
         setattr(client, CURRENT_LINK, self)
         thread = getattr(client, "recv_topic_thread", None)
         if thread is not None and thread.is_alive():
-            return _take_over(client)
+            return take_over(client)
         if thread is not None and not client.state:
             return False  # disconnected on purpose
         client.socket_topics.recv_timeout = 100  # bounded block so the loop sees `state` change
@@ -151,12 +191,13 @@ class SimLink:
         except Exception as exc:
             self._bad_frame(f"undecodable frame dropped ({type(exc).__name__}: {exc})")
             return
-        info = client.topics.get(topic) or _unknown_topic(topic)
+        info = client.topics.get(topic) or unknown_topic(topic)
         for callback in entry["callbacks"]:
             try:
                 callback(info, message)
-            except Exception as exc:
-                self._bad_frame(f"{topic}: callback failed ({type(exc).__name__}: {exc})")
+            except Exception as exc:  # not a bad frame: the callback's own bug, told with its traceback
+                self.counts.callback_errors += 1
+                self._warn(f"{topic}: a callback failed: {type(exc).__name__}: {exc}", exc)
 
     def _decode(self, topic: str, entry: dict, body: bytes) -> Any:
         message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))
@@ -178,11 +219,16 @@ class SimLink:
     # --- liveness ---------------------------------------------------------------------------
     def _on_pipe_removed(self, _pipe: Any) -> None:
         """NNG callback thread: the server closed a connection (died, restarted, or dropped us)."""
-        self.dropped.set()
+        self.connection.drop()
+
+    @property
+    def dead(self) -> bool:
+        """Marked dead: every call fails at once (see LinkState)."""
+        return self.connection.dead
 
     def connected(self) -> bool:
         """The topics connection never dropped since this link was made."""
-        return not self.dead and not self.dropped.is_set()
+        return self.connection.connected()
 
     def probe(self, timeout: float) -> bool:
         """One cheap request: did the server answer within `timeout` seconds?"""
@@ -194,7 +240,7 @@ class SimLink:
 
     def mark_dead(self) -> None:
         """From now on every call fails at once; subscriptions are only remembered."""
-        self.dead = True
+        self.connection.kill()
 
     # --- topics -----------------------------------------------------------------------------
     def subscribe(self, topic: str, callback: TopicCallback) -> None:
@@ -223,7 +269,7 @@ class SimLink:
             entry["callbacks"] = [cb for cb in callbacks if cb != callback]
             if entry["callbacks"]:
                 return False
-            if self._closing:
+            if self.connection.closing:
                 self._pending.add(topic)
                 return False
             return True
@@ -326,7 +372,7 @@ class SimLink:
 
     def begin_close(self) -> None:
         """From now on unsubscribes are collected for `close` instead of sent one by one."""
-        self._closing = True
+        self.connection.begin_close()
 
     def close(self, timeout: float = 10.0, client_topics: bool = False) -> bool:
         """Remove every callback of ours from the client, tell the server in one request (waiting at most
@@ -356,99 +402,3 @@ class SimLink:
                         self.client.subs.pop(topic, None)
         self.stop_loop()
         return answered
-
-
-def decode_body(body: bytes, fast: bool) -> tuple[Any, bool]:
-    """The message of a frame body, and whether it took the fast path.
-
-    With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
-    straight into numpy (fast_frames.decode_map), skipping the per-element Python lists msgpack would
-    build (docs/performance.md has the cost), and its large bin values (image pixels) as memoryviews of
-    the body, which the image converter publishes without a copy. Everything else, and anything unusual,
-    takes msgpack's path, exactly as the client would.
-    """
-    import msgpack
-
-    if fast and len(body) >= FAST_MIN_BYTES:
-        try:
-            message = decode_map(body, views=True)
-        except Exception:
-            message = None
-        if message is not None:
-            return message, True
-    return msgpack.unpackb(body, raw=False), False
-
-
-def receive(client: Any) -> None:
-    """The bridge's receive loop on a client's topics socket, until the client stops or the socket closes.
-
-    Each frame goes to the client's current link (`SimLink.dispatch`): a malformed frame or a failing
-    callback is dropped and counted there, and the loop goes on.
-    """
-    import pynng
-
-    sock = client.socket_topics
-    while client.state:
-        try:
-            packed = sock.recv()
-        except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
-            continue
-        except pynng.exceptions.Closed:
-            return
-        except pynng.exceptions.NNGException as exc:
-            getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
-            continue
-        getattr(client, CURRENT_LINK).dispatch(packed)
-
-
-def _take_over(client: Any) -> bool:
-    """Make the client's own receive thread run `receive`; True if it was not doing so already.
-
-    The client's loop reads each frame through its private `__recv_topic_frame` and then decodes and
-    dispatches it itself. An instance attribute of that name shadows the method: the thread's next read
-    enters `receive` and stays there until the client stops; the frame read before the swap is the
-    client's last, and this call waits for the swap. A client without that method (another version)
-    keeps its own loop, with a warning.
-    """
-    if getattr(client.recv_topic_thread, "name", "") == RECEIVE_THREAD or CLIENT_READ in vars(client):
-        return False
-    if not callable(getattr(type(client), CLIENT_READ, None)):
-        log.warning("this projectairsim client has no %s: its own receive loop stays in use", CLIENT_READ)
-        vars(client)[CLIENT_READ] = None  # warns once; a client without the method never reads it
-        return False
-
-    entered = threading.Event()
-
-    def read() -> None:
-        entered.set()
-        receive(client)
-        if client.state:  # the socket closed under a live client: the client's loop would spin
-            time.sleep(0.1)
-
-    vars(client)[CLIENT_READ] = read
-    # The client's thread reads again within its 100 ms receive timeout; until then a frame would still
-    # be the client's to decode, so the bridge subscribes nothing before the swap has happened.
-    if not entered.wait(TAKE_OVER_WAIT_S):
-        log.warning(
-            "the client's receive thread did not pick up the bridge's loop within %g s", TAKE_OVER_WAIT_S
-        )
-    return True
-
-
-def _unknown_topic(topic: str) -> Any:
-    from projectairsim.types import ProjectAirSimTopic
-
-    return ProjectAirSimTopic(topic, "unknown", "unknown", 0)
-
-
-def close_client(client: Any) -> None:
-    """Close a client's sockets at once, without talking to the server; joins its receive thread."""
-    client.state = False  # ends the receive loop within its 100 ms receive timeout
-    thread = getattr(client, "recv_topic_thread", None)
-    if thread is not None and thread.is_alive() and thread is not threading.current_thread():
-        thread.join(timeout=2)
-    for name in ("socket_topics", "socket_services"):
-        sock = getattr(client, name, None)
-        if sock is not None:
-            with contextlib.suppress(Exception):
-                sock.close()

@@ -3,7 +3,8 @@
 Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
 "unresponsive: ..." while it is open), reconnects, sim_losses, stalls (times the simulator stopped
 answering on an open connection), master_reregistrations, bad_frames and oversized_frames (simulator
-frames dropped: undecodable, or over --max-frame-mb / an image's max_pixels), sim_time_jumps_back and
+frames dropped: undecodable, or over --max-frame-mb / an image's max_pixels), callback_errors (a callback
+on the receive thread raised, a mission script's say; logged with its traceback), sim_time_jumps_back and
 sim_time_last_jump_back_s (/clock going backwards, see simtime.py), and per simulator topic stream: received,
 dropped, handled, errors, age_s (seconds since its last message), and the peaks since the previous
 status: arrival_gap_max_ms (longest interval between two arrivals), wait_max_ms (longest wait for the

@@ -24,9 +24,9 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from airsim_mapper.engine.bridges import RosToSim
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
+from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 
@@ -232,6 +232,7 @@ class Supervisor:
             **self.counters,
             "bad_frames": engine.frame_counts.bad,
             "oversized_frames": engine.frame_counts.oversized,
+            "callback_errors": engine.frame_counts.callback_errors,
             "sim_time_jumps_back": engine.sim_time.jumps_back,
             "sim_time_last_jump_back_s": round(engine.sim_time.last_jump_s, 3),
             "gc_max_ms": engine.gc_pauses.take_peak_ms(),

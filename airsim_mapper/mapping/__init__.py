@@ -1,3 +1,10 @@
-"""The mapping language: load and validate a mapping YAML, and expand its rules over a scene."""
+"""The mapping language: load and validate a mapping YAML, and expand its rules over a scene.
+
+Its face (`__all__`, the modules the layers above import): `loader`, `expand`, `pipeline` (both in one
+call), `model` (Mapping, BridgeSpec), `errors`, `diff`, `report`, `match`, `names` and `extends` (what the
+command line shows of a mapping). Everything else is the mapping layer's own.
+"""
 
 from __future__ import annotations
+
+__all__ = ["diff", "errors", "expand", "extends", "loader", "match", "model", "names", "pipeline", "report"]

@@ -26,8 +26,7 @@ from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
-IMAGE_CONVERTERS = ("image", "streaming_image")  # take params.max_pixels and params.max_bytes
-IMAGE_BOUNDS = ("max_pixels", "max_bytes")
+IMAGE_BOUNDS = ("max_pixels", "max_bytes")  # what a converter marked max_pixels in the catalogue takes
 
 
 class _Checker:
@@ -147,7 +146,8 @@ class _Checker:
             if key not in rule.params:
                 continue
             value = rule.params[key]
-            if rule.converter not in IMAGE_CONVERTERS:
+            info = catalog.find(rule.converter)
+            if info is None or not info.max_pixels:
                 self.add(
                     (*base, "params", key),
                     f"rule '{rule.name}': params.{key} applies only to the image converters",

@@ -153,7 +153,7 @@ class CameraStream:
         scene = next((c for c in self.sensor.captures if c.image_type == camera_model.SCENE), None)
         width, height = (scene.width, scene.height) if scene else annotations.DEFAULT_SIZE
         fov = self.fov.get(camera_model.SCENE, scene.fov_deg if scene else annotations.DEFAULT_FOV_DEG)
-        return annotations.annotate(self.world, settings, position, orientation, width, height, fov)
+        return annotations.annotate(self.world.current, settings, position, orientation, width, height, fov)
 
     def get_images(self, image_types: list[int], now_ns: Callable[[], int]) -> dict[str, Any]:
         """GetImages: wait for a capture at or after the request's sim time; JSON form (data as a list)."""

@@ -397,7 +397,9 @@ def renderer() -> GLRenderer:
 
 
 def render(world: World, request: RenderRequest) -> dict[int, RenderedImage]:
-    """`rendering.render` with OpenGL in this process's context; one render at a time per process."""
+    """`rendering.render` with OpenGL in this process's context; one render at a time per process.
+
+    A changing world is rendered as it is now (its GL buffers are kept per World, which never changes)."""
     gl = renderer()
     with _LOCK:
-        return gl.render(world, request)
+        return gl.render(world.current, request)

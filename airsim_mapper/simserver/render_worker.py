@@ -9,8 +9,9 @@ does.
 
 The child is `python -m airsim_mapper.simserver.render_worker FD NICE`: it reads requests from one end of
 a socket pair and answers on the same end (pickled by `multiprocessing.connection`). The first message
-is the World; each request is a RenderRequest; each answer is the dict of RenderedImage, or the
-CameraError it raised.
+is the World, and a World sent later (objects moved, spawned or destroyed) replaces it without an
+answer; each request is a RenderRequest; each answer is the dict of RenderedImage, or the CameraError
+it raised.
 
 The child renders with `rendering.render`, so with OpenGL by default: its EGL context and llvmpipe's threads
 live in the child, at its priority, made on its first render (docs/rendering.md).
@@ -66,6 +67,7 @@ class RenderWorker:
         self._closed = False
         self._answered = False  # the current child has answered at least once
         self._in_process = False  # set for good when a new child fails before its first answer
+        self._sent: World | None = None  # the world the current child renders
 
     @property
     def restarts(self) -> int:
@@ -81,9 +83,12 @@ class RenderWorker:
             if self._closed:
                 raise RenderWorkerError("the render worker is closed")
             if self._in_process:
-                return rendering.render(self.world, request)
+                return rendering.render(self.world.current, request)
             try:
                 conn = self._connection()
+                if self._sent is not self.world.current:
+                    self._sent = self.world.current
+                    conn.send(self._sent)
                 conn.send(request)
                 if not conn.poll(ANSWER_TIMEOUT_S):
                     raise RenderWorkerError(f"no answer within {ANSWER_TIMEOUT_S:g} s")
@@ -96,7 +101,7 @@ class RenderWorker:
                     raise RenderWorkerError(f"render worker failed ({reason})") from exc
                 LOG.error("the render worker does not start (%s); rendering in the server process", reason)
                 self._in_process = True
-                return rendering.render(self.world, request)
+                return rendering.render(self.world.current, request)
             self._answered = True
         if isinstance(answer, Exception):
             raise answer
@@ -138,7 +143,8 @@ class RenderWorker:
         self.starts += 1
         self._answered = False
         self._conn = Connection(ours.detach())
-        self._conn.send(self.world)
+        self._sent = self.world.current
+        self._conn.send(self._sent)
         return self._conn
 
     def _discard(self) -> None:
@@ -204,7 +210,8 @@ def set_autogroup_nice(path: Path, nice: int, attempts: int = 20, pause_s: float
 
 
 def serve(conn: Connection, nice: int) -> None:
-    """The child's loop: the world first, then one answer per request until end of file."""
+    """The child's loop: the world first, then one answer per request until end of file (a new world
+    replaces the old one, unanswered)."""
     lower_priority(nice)
     world: World = conn.recv()
     while True:
@@ -212,6 +219,9 @@ def serve(conn: Connection, nice: int) -> None:
             request = conn.recv()
         except EOFError:
             return
+        if isinstance(request, World):
+            world = request
+            continue
         try:
             answer: object = rendering.render(world, request)
         except CameraError as exc:

@@ -70,7 +70,10 @@ def renderer_name() -> str:
 
 
 def render(world: World, request: RenderRequest) -> dict[int, RenderedImage]:
-    """The requested images of a camera, by this process's renderer; CameraError if the request is invalid."""
+    """The requested images of a camera, by this process's renderer; CameraError if the request is invalid.
+
+    A changing world is drawn as it is now, all of one image from one World."""
+    world = world.current
     request.check()
     if not request.kinds:
         return {}

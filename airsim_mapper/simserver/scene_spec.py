@@ -21,7 +21,7 @@ from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
 from airsim_mapper.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings
 from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
-from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec
+from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec, actor_script
 from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
@@ -357,7 +357,8 @@ def _env_actor(actor: Any, index: int, home: tuple[float, float, float]) -> EnvA
     config = actor.get("env-actor-config", {})
     links = config.get("links", []) if isinstance(config, Mapping) else []
     names = tuple(str(link["name"]) for link in links if isinstance(link, Mapping) and "name" in link)
-    return EnvActorSpec(str(name), position, orientation, names)
+    script = actor_script(config, f"environment actor '{name}'", SceneSpecError)
+    return EnvActorSpec(str(name), position, orientation, names, script)
 
 
 # ---------------------------------------------------------------------------------------------- topics

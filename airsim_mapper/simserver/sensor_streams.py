@@ -216,14 +216,14 @@ class RadarStream:
         if detect:
 
             def detections() -> dict[str, Any]:
-                found = self.model.detect(self.world, position, orientation, velocity, now_ns)
+                found = self.model.detect(self.world.current, position, orientation, velocity, now_ns)
                 return {"time_stamp": int(now_ns), "radar_detections": found, "pose": pose}
 
             worked = self.hub.offer(self.detections_path, detections)
         if track:
 
             def tracks() -> dict[str, Any]:
-                found = self.model.track(self.world, position, orientation, velocity, now_ns)
+                found = self.model.track(self.world.current, position, orientation, velocity, now_ns)
                 return {"time_stamp": int(now_ns), "radar_tracks": found, "pose": pose}
 
             worked = self.hub.offer(self.tracks_path, tracks) or worked

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+from airsim_mapper.simserver.objects import LiveWorld
 from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
 from airsim_mapper.simserver.scene_spec import SceneSpec, SceneSpecError, default_scene, parse_scene
 from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
@@ -68,7 +69,7 @@ class SimServer:
 
     def __init__(self, options: ServerOptions) -> None:
         self.options = options
-        self.world = load_world(options.world_path)
+        self.world = LiveWorld(load_world(options.world_path))  # objects move, appear and vanish at run time
         nice = options.render_nice
         self.render_worker = RenderWorker(self.world, nice) if nice is not None else None
         self.table = MethodTable()

@@ -11,6 +11,7 @@ import numpy as np
 from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.camera_stream import Render
 from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
+from airsim_mapper.simserver.objects import LiveWorld, Pose, SceneObjects
 from airsim_mapper.simserver.robot_services import robot_methods
 from airsim_mapper.simserver.robots import RobotRuntime
 from airsim_mapper.simserver.scene_spec import EARTH_RADIUS_M, SceneSpec, topic_table
@@ -92,9 +93,11 @@ class Session:
         self.spec = spec
         self.hub = hub
         self.clock = SimClock(spec.clock.type, spec.clock.step_ns, spec.clock.pause_on_start, lock_step=True)
+        self.world = world = world if isinstance(world, LiveWorld) else LiveWorld(world)
         self.robots = {r.name: RobotRuntime(spec, r, world, hub, self.clock, render) for r in spec.robots}
         self.trajectories = TrajectoryStore()
-        self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories)
+        self.env_actors = EnvActors(spec.env_actors, spec.prefix, self.trajectories, self.clock.now_ns())
+        self.objects = SceneObjects(self.world, self._actor_poses, spec.home_geo)
         self.visuals = VisualSettings(self._set_wind)
         self.last_tick_ns = self.clock.now_ns()
         self.started_ns = self.last_tick_ns
@@ -168,9 +171,21 @@ class Session:
             ),
         ]
         table += self.visuals.methods(p)
+        table += self.objects.methods(p)
         for robot in self.robots.values():
             table += robot_methods(robot)
         return table
+
+    def _actor_poses(self) -> dict[str, Pose]:
+        """Every robot's and env actor's pose now, by name (the actors of ListObjects and GetObjectPose)."""
+        poses = {}
+        for name, robot in self.robots.items():
+            kin = robot.body.snapshot()
+            poses[name] = (kin.position, kin.orientation)
+        now = self.clock.now_ns()
+        for name, actor in self.env_actors.actors.items():
+            poses[name] = actor.state(now)[:2]
+        return poses
 
     def _set_wind(self, wind: list[float]) -> None:
         for robot in self.robots.values():

@@ -162,6 +162,11 @@ class World:
     def object_named(self, name: str) -> WorldObject | None:
         return self._by_name.get(name)
 
+    @property
+    def current(self) -> World:
+        """This world; a changing world (`objects.LiveWorld`) answers its newest one."""
+        return self
+
     def colors_of(self, object_index: np.ndarray) -> np.ndarray:
         """(3, N) base B, G, R rows (float32, 0-255) of each hit: sky for a miss, ground, or the object."""
         slots = np.asarray(object_index).astype(np.intp) + 2

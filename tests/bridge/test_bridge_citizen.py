@@ -318,8 +318,9 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
     import rospy
     from std_msgs.msg import String
 
-    from airsim_mapper.engine.bridges import RosToSim, Services
+    from airsim_mapper.engine.bridges import Services
     from airsim_mapper.engine.ros_link import RosLink
+    from airsim_mapper.engine.ros_to_sim import RosToSim
     from airsim_mapper.mapping.expand import expand
     from airsim_mapper.mapping.loader import load_mapping
 

@@ -6,13 +6,13 @@ import ast
 from pathlib import Path
 
 from airsim_mapper.convert import catalog
-from airsim_mapper.engine import bridges
+from airsim_mapper.engine import bridges, runners
 
 ENGINE = Path(bridges.__file__).resolve().parent
 
 
 def test_every_runner_after_hook_and_action_the_catalogue_names_exists():
-    assert set(bridges.RUNNERS) == set(catalog.RUNNERS)
+    assert set(runners.RUNNERS) == set(catalog.RUNNERS)
     assert set(bridges.AFTER_HOOKS) == set(catalog.AFTER_HOOKS)
     for info in catalog.CONVERTERS.values():
         assert info.runner in catalog.RUNNERS, info.name

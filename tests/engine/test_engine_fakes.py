@@ -3,59 +3,25 @@ seconds (no simulator, no ROS master)."""
 
 from __future__ import annotations
 
-import json
-
 import pytest
-from fakes import IMU_MESSAGE, FakeRos, FakeSim, fake_client
+from fakes import IMU_MESSAGE, EngineRig
 from harness import SIM_CONFIG, wait_until
 
-from airsim_mapper.engine.engine import Engine
-from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, status_topic
-from airsim_mapper.mapping.loader import load_mapping
+from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED
 
 SCENE = "scene_drone_sensors.jsonc"
 IMU_ROS = "/airsim_node/Drone1/IMU1/imu"
 IMU_SIM = "/Sim/SceneDroneSensors/robots/Drone1/sensors/IMU1/imu_kinematics"
 
 
-class Rig:
-    """An engine whose every simulator link and world load is recorded."""
-
-    def __init__(self, reconnect: bool = True) -> None:
-        self.links: list[FakeSim] = []
-        self.worlds: list[str] = []
-        self.ros = FakeRos()
-        self.engine = Engine(
-            fake_client(),
-            load_mapping("default"),
-            SIM_CONFIG,
-            "node",
-            load_world=self._load_world,
-            client_factory=fake_client if reconnect else None,
-            ros=self.ros,
-            link=self._link,
-        )
-
-    def _link(self, client, counts) -> FakeSim:
-        self.links.append(FakeSim(client, counts))
-        return self.links[-1]
-
-    def _load_world(self, client, scene, _path) -> str:
-        self.worlds.append(scene.file)
-        return f"world of {scene.file}"
-
-    def statuses(self) -> list[dict]:
-        return [json.loads(m.data) for m in self.ros.publishers[status_topic("node")].messages]
-
-
 @pytest.fixture
 def rig():
-    made = Rig()
+    made = EngineRig()
     yield made
     made.engine.shutdown(timeout=2.0)
 
 
-def test_a_scene_load_builds_its_bridges_and_a_second_replaces_them(rig: Rig):
+def test_a_scene_load_builds_its_bridges_and_a_second_replaces_them(rig: EngineRig):
     scene = rig.engine.load_scene(SCENE)
     assert scene.name == "SceneDroneSensors" and rig.worlds == [SCENE]
     names = set(rig.engine.bridges)
@@ -67,7 +33,7 @@ def test_a_scene_load_builds_its_bridges_and_a_second_replaces_them(rig: Rig):
     assert imu_publisher.unregistered  # the old scene's bridges are gone, whatever the new one has
 
 
-def test_a_refused_scene_keeps_the_current_one(rig: Rig):
+def test_a_refused_scene_keeps_the_current_one(rig: EngineRig):
     rig.engine.load_scene(SCENE)
     before = dict(rig.engine.bridges)
     with pytest.raises(Exception, match="no_such_scene"):
@@ -75,7 +41,7 @@ def test_a_refused_scene_keeps_the_current_one(rig: Rig):
     assert rig.engine.bridges == before and rig.worlds == [SCENE]
 
 
-def test_a_dropped_connection_reconnects_reloads_and_moves_the_streams_over(rig: Rig):
+def test_a_dropped_connection_reconnects_reloads_and_moves_the_streams_over(rig: EngineRig):
     rig.engine.load_scene(SCENE)
     rig.ros.publishers[IMU_ROS].subscribers(1)
     first = rig.links[0]
@@ -91,7 +57,7 @@ def test_a_dropped_connection_reconnects_reloads_and_moves_the_streams_over(rig:
     assert rig.engine.counters["sim_losses"] == 1
 
 
-def test_a_silent_simulator_is_stale_then_answers_again_without_a_reload(rig: Rig):
+def test_a_silent_simulator_is_stale_then_answers_again_without_a_reload(rig: EngineRig):
     rig.engine.load_scene(SCENE)
     rig.links[0].answering = False
     wait_until(lambda: rig.engine.state == STALE, 10, what="the stall")
@@ -102,7 +68,7 @@ def test_a_silent_simulator_is_stale_then_answers_again_without_a_reload(rig: Ri
 
 
 def test_shutdown_stops_every_bridge_and_says_so():
-    rig = Rig(reconnect=False)
+    rig = EngineRig(reconnect=False)
     rig.engine.load_scene(SCENE)
     publishers = list(rig.ros.publishers.values())
     assert rig.engine.shutdown(timeout=2.0)
@@ -128,7 +94,7 @@ def test_a_scene_read_and_expanded_at_start_up_is_loaded_without_reading_or_expa
     assert set(rig.engine.bridges) == {spec.name for spec in specs}
 
 
-def test_an_edited_mapping_restarts_only_the_bridges_whose_expansion_changed(rig: Rig):
+def test_an_edited_mapping_restarts_only_the_bridges_whose_expansion_changed(rig: EngineRig):
     from airsim_mapper.mapping.loader import load_mapping_text
 
     rig.engine.load_scene(SCENE)
@@ -147,7 +113,7 @@ def test_an_edited_mapping_restarts_only_the_bridges_whose_expansion_changed(rig
     assert rig.ros.publishers["/airsim_node/Drone1/actual_pose"].unregistered
 
 
-def test_a_bridge_that_cannot_start_stays_off_and_every_other_one_runs(rig: Rig, caplog):
+def test_a_bridge_that_cannot_start_stays_off_and_every_other_one_runs(rig: EngineRig, caplog):
     from airsim_mapper.mapping.loader import load_mapping_text
 
     rig.engine.load_scene(SCENE)
@@ -171,7 +137,7 @@ def test_a_bridge_that_cannot_start_stays_off_and_every_other_one_runs(rig: Rig,
     assert "actual_pose[Drone1]" in rig.engine.bridges
 
 
-def test_time_going_back_in_the_pose_stream_starts_tf_and_the_stale_filters_over(rig: Rig, caplog):
+def test_time_going_back_in_the_pose_stream_starts_tf_and_the_stale_filters_over(rig: EngineRig, caplog):
     rig.engine.load_scene(SCENE)
     pose = "/Sim/SceneDroneSensors/robots/Drone1/actual_pose"
     sim = rig.links[-1]

@@ -7,7 +7,7 @@ import threading
 from airsim_mapper.engine.hub import StreamHub
 
 
-class FakeSim:
+class RecordingLink:
     """Records the hub's subscriptions (the part of SimLink the hub uses)."""
 
     def __init__(self) -> None:
@@ -31,7 +31,7 @@ class Bridge:
 
 
 def test_detaching_with_a_fresh_bound_method_detaches_and_the_last_one_unsubscribes() -> None:
-    sim = FakeSim()
+    sim = RecordingLink()
     hub = StreamHub(sim, lambda _tf: None)
     first, second = Bridge(), Bridge()
     hub.attach("/t", first.handle)
@@ -46,7 +46,7 @@ def test_detaching_with_a_fresh_bound_method_detaches_and_the_last_one_unsubscri
     assert "/t" not in hub.streams() and sim.callbacks["/t"] == []  # unsubscribed from the simulator
 
 
-class SlowUnsubscribeSim(FakeSim):
+class SlowUnsubscribeSim(RecordingLink):
     """A simulator whose unsubscribe service call is in flight until released, as over a slow link."""
 
     def __init__(self) -> None:
@@ -88,7 +88,7 @@ def test_an_attach_waits_for_an_unsubscribe_in_flight_so_the_server_sees_them_in
 
 
 def test_every_streams_stamps_reach_the_time_watch_and_a_new_session_forgets_the_newest() -> None:
-    sim, seen = FakeSim(), []
+    sim, seen = RecordingLink(), []
     hub = StreamHub(sim, lambda _tf: None, on_stamp=lambda stamp, _now: seen.append(stamp))
     bridges = [Bridge(), Bridge()]
     hub.attach("/a", bridges[0].handle)

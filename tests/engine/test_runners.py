@@ -7,15 +7,17 @@ import logging
 import time
 
 import pytest
-from fakes import IMU_MESSAGE, FakeRos, FakeSim
+from fakes import IMU_MESSAGE, FakeRos, FakeSimLink
 from geometry_msgs.msg import PoseStamped, Twist
 from harness import SIM_CONFIG, wait_until
 from std_msgs.msg import String
 from std_srvs.srv import TriggerRequest
 
 from airsim_mapper.convert.pose import camera_pose_key
-from airsim_mapper.engine.bridges import RosService, RosToSim, Services, SimToRos, StreamingImage, build
+from airsim_mapper.engine.bridges import Services, SimToRos, StreamingImage
 from airsim_mapper.engine.hub import StreamHub
+from airsim_mapper.engine.ros_to_sim import RosService, RosToSim
+from airsim_mapper.engine.runners import build
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.scene import read_scene
@@ -32,8 +34,8 @@ def spec_of(specs, prefix: str):
 
 
 @pytest.fixture
-def sim() -> FakeSim:
-    return FakeSim()
+def sim() -> FakeSimLink:
+    return FakeSimLink()
 
 
 @pytest.fixture
@@ -42,7 +44,7 @@ def ros() -> FakeRos:
 
 
 @pytest.fixture
-def services(sim: FakeSim, ros: FakeRos) -> Services:
+def services(sim: FakeSimLink, ros: FakeRos) -> Services:
     actions: list[tuple[str, dict]] = []
     found = Services(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda a, p: actions.append((a, p)))
     found.actions = actions  # type: ignore[attr-defined]
@@ -181,3 +183,36 @@ def test_a_goal_in_a_huge_frame_is_refused_with_the_frame_cut_short(specs, servi
     warnings = [r.getMessage() for r in caplog.records]
     assert len(warnings) == 1 and len(warnings[0]) < 1000 and "more)" in warnings[0]
     assert len(bridge.stats.last_error) < 1000  # the status topic and /diagnostics show it too
+
+
+def test_a_converter_that_raises_something_else_is_a_bridge_error_logged_with_its_traceback(
+    specs, services, sim, ros, caplog
+):
+    def broken(_msg, _ctx):
+        raise RuntimeError("a converter bug")
+
+    spec = spec_of(specs, "imu[Drone1/IMU1]")
+    bridge = build(spec, services)
+    bridge.convert = broken
+    bridge.start()
+    ros.publishers[spec.ros].subscribers(1)
+    sim.deliver(spec.sim, IMU_MESSAGE)
+    wait_until(lambda: bridge.stats.errors == 1, 5, what="the bridge error")
+    assert "RuntimeError: a converter bug" in bridge.stats.last_error
+    stream = services.hub.streams()[spec.sim]
+    wait_until(lambda: stream.stats.handled == 1, 5, what="the handled message")
+    assert stream.stats.errors == 0 and services.counts.bad == 0  # the bridge's error, not the stream's
+    logged = [r for r in caplog.records if "a converter bug" in r.getMessage()]
+    assert logged and logged[0].exc_info is not None and logged[0].exc_info[0] is RuntimeError
+    bridge.stop()
+
+    command = build(spec_of(specs, "cmd_vel[Drone1]"), services)
+    command.convert = broken
+    command.start()
+    ros.subscribers[command.spec.ros].handler(Twist())
+    assert command.stats.errors == 1 and sim.calls == []
+    service = build(spec_of(specs, "takeoff[Drone1]"), services)
+    service.convert = broken
+    service.start()
+    response = ros.services[service.spec.ros].handler(TriggerRequest())
+    assert not response.success and "a converter bug" in response.message and service.stats.errors == 1

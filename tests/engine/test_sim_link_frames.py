@@ -82,3 +82,34 @@ def test_the_counts_outlive_a_link():
     receive([frame({"n": 1})], counts)
     receive([frame({"n": 1})], counts)
     assert counts.oversized == 2
+
+
+def test_a_failing_callback_is_no_bad_frame_and_is_logged_with_its_traceback(caplog):
+    counts = FrameCounts()
+
+    def failing(_info, _message):
+        raise KeyError("the callback's own bug")
+
+    client = Client([frame({"n": 1}), frame({"n": 2})], failing)
+    link = SimLink(client, counts)
+    client.recv_topic_thread.join(timeout=5)
+    link.stop_loop()
+    assert (counts.callback_errors, counts.bad) == (2, 0)
+    logged = [r for r in caplog.records if "a callback failed" in r.getMessage()]
+    assert len(logged) == 1 and logged[0].exc_info[0] is KeyError  # the second held back (rate limit)
+
+
+def test_the_links_connection_state_is_one_object_with_its_own_lock():
+    from airsim_mapper.engine.sim_link import LinkState
+
+    state = LinkState()
+    assert state.connected() and not state.dead and not state.closing
+    state.drop()
+    assert not state.connected() and not state.dead
+    state.kill()
+    state.begin_close()
+    assert state.dead and state.closing
+    link = SimLink(Client([], lambda *_: None), FrameCounts())
+    link.mark_dead()
+    assert link.dead and link.connection.dead and not link.connected()
+    link.stop_loop()

@@ -33,8 +33,8 @@ def documented_table() -> str:
 
 def test_the_documented_converter_table_equals_the_catalogue():
     assert documented_table() == markdown_table(), (
-        f"docs/converters.md is out of date: replace the lines between {BEGIN} and {END} "
-        "with the output of `airsim-mapper converters`"
+        "docs/converters.md is out of date: `python -m tools.catalogue` regenerates the lines between "
+        f"{BEGIN} and {END} (the output of `airsim-mapper converters`)"
     )
 
 

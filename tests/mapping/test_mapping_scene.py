@@ -202,3 +202,24 @@ def test_a_fifo_scene_or_robot_config_is_refused_at_once_naming_the_file(tmp_pat
         "not a regular file"
     )
     assert time.monotonic() - start < 5
+
+
+def test_scenes_read_at_once_from_many_threads_share_the_clients_patches_under_one_lock():
+    import threading
+
+    import projectairsim.utils as client_utils
+
+    original = client_utils.get_schema
+    results: list = []
+
+    def read() -> None:
+        for _ in range(2):
+            results.append(read_scene(SIM_CONFIG, "scene_basic_drone.jsonc").name)
+
+    threads = [threading.Thread(target=read) for _ in range(6)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(timeout=120)
+    assert results == ["SceneBasicDrone"] * 12
+    assert client_utils.get_schema is original and "open" not in vars(client_utils)

@@ -31,7 +31,13 @@ OPTIONS = tuple(field.name for field in fields(Options))
     ],
 )
 def test_the_schemas_enums_equal_the_codes_tables(name, table):
-    assert tuple(DEFS[name]["enum"]) == table
+    enum = tuple(DEFS[name]["enum"])
+    missing = [value for value in table if value not in enum]
+    extra = [value for value in enum if value not in table]
+    regenerate = "; `python -m tools.catalogue` regenerates the converter and for_each enums"
+    assert not missing, f"the schema's {name} enum lacks {missing}{regenerate}"
+    assert not extra, f"the schema's {name} enum has {extra}, which the code does not{regenerate}"
+    assert enum == table, f"the schema's {name} enum is not in the code's order{regenerate}"
 
 
 def test_every_option_is_defined_once_and_referred_to_from_defaults_and_rules():

@@ -8,7 +8,7 @@ import msgpack
 import pytest
 from harness import Rig, RosMaster, wait_until
 
-from reliability.fakesim import FakeSim, message_frame
+from reliability.fake_server import FakeSimServer, message_frame
 from reliability.relkit import ROBOT, SCENE, SimPorts, probe, stamps, start_node, statuses
 
 SIM = "/Sim/SceneDroneSensors/robots/Drone1"
@@ -56,9 +56,9 @@ def radar_frames() -> list[bytes]:
 
 
 @pytest.fixture
-def fake(launcher: Rig) -> tuple[FakeSim, SimPorts]:
+def fake(launcher: Rig) -> tuple[FakeSimServer, SimPorts]:
     ports = SimPorts.free()
-    sim = FakeSim(
+    sim = FakeSimServer(
         "127.0.0.1",
         ports.topics,
         ports.services,
@@ -70,7 +70,7 @@ def fake(launcher: Rig) -> tuple[FakeSim, SimPorts]:
 
 
 def test_malformed_simulator_frames_are_dropped_counted_and_reported_while_the_streams_go_on(
-    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSim, SimPorts]
+    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSimServer, SimPorts]
 ):
     _sim, ports = fake
     node = start_node(launcher, ports, "--scene", SCENE, node_name="sturdy")

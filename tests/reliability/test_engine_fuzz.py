@@ -12,7 +12,8 @@ from harness import wait_until
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from airsim_mapper.engine.bridges import Services, SimToRos, build
+from airsim_mapper.engine.bridges import Services, SimToRos
+from airsim_mapper.engine.runners import build
 from airsim_mapper.engine.streams import Stream
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping

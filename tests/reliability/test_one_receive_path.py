@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from harness import Rig, RosMaster
 
-from reliability.fakesim import FakeSim
+from reliability.fake_server import FakeSimServer
 from reliability.relkit import PROJECT_SIM_CONFIG, ROBOT, SCENE, SimPorts
 from reliability.test_bad_sim_data import POSE, good_pose, pose_frames
 
@@ -22,7 +22,7 @@ def test_the_bridge_receive_loop_runs_and_survives_a_malformed_frame(
     launcher: Rig, ros_master: RosMaster, order: str
 ):
     ports = SimPorts.free()
-    sim = FakeSim("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {POSE: pose_frames()})
+    sim = FakeSimServer("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {POSE: pose_frames()})
     try:
         args = [order, str(ports.topics), str(ports.services), str(PROJECT_SIM_CONFIG), SCENE, POSE]
         mission = launcher.python(
@@ -34,7 +34,7 @@ def test_the_bridge_receive_loop_runs_and_survives_a_malformed_frame(
     line = next(x for x in mission.output().splitlines() if x.startswith("RESULT "))
     result = json.loads(line.removeprefix("RESULT "))
     stack = result["receive_stack"]
-    assert "airsim_mapper.engine.sim_link.receive" in stack, stack
+    assert "airsim_mapper.engine.receive.receive" in stack, stack
     if order == "world-first":  # the client's own thread, now running the bridge's loop
         assert "projectairsim.client.__recv_topic" in stack and result["receive_thread"] != "sim-receive"
     else:

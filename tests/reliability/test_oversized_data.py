@@ -12,7 +12,7 @@ import pytest
 from harness import Rig, RosMaster, wait_until
 
 from airsim_mapper.simserver.protocol import encode_frame
-from reliability.fakesim import FakeSim, message_frame
+from reliability.fake_server import FakeSimServer, message_frame
 from reliability.relkit import SimPorts, probe, stamps, start_node, statuses
 
 SIM = "/Sim/SceneDroneSensors/robots/Drone1"
@@ -49,9 +49,11 @@ def camera_frames() -> list[bytes]:
 
 
 @pytest.fixture
-def fake(launcher: Rig) -> tuple[FakeSim, SimPorts]:
+def fake(launcher: Rig) -> tuple[FakeSimServer, SimPorts]:
     ports = SimPorts.free()
-    sim = FakeSim("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: camera_frames()})
+    sim = FakeSimServer(
+        "127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: camera_frames()}
+    )
     yield sim, ports
     sim.close()
 
@@ -63,7 +65,7 @@ def rss_mb(pid: int) -> float:
 
 
 def test_oversized_and_empty_images_are_dropped_and_counted_and_memory_stays_small(
-    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSim, SimPorts]
+    launcher: Rig, ros_master: RosMaster, fake: tuple[FakeSimServer, SimPorts]
 ):
     _sim, ports = fake
     node = start_node(launcher, ports, "--scene", "scene_drone_sensors.jsonc", "--max-frame-mb", "1")
@@ -106,7 +108,7 @@ def test_memory_returns_after_large_images(launcher: Rig, ros_master: RosMaster)
     side = 5770  # 99.9 MB once decoded: just under the byte cap
     large = cv2.imencode(".png", np.full((side, side, 3), 7, dtype=np.uint8))[1].tobytes()
     ports = SimPorts.free()
-    sim = FakeSim("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: [good]})
+    sim = FakeSimServer("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: [good]})
     try:
         node = start_node(launcher, ports, "--scene", "scene_drone_sensors.jsonc")
         images = probe(launcher, "image", "watch", IMAGE)

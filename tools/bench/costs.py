@@ -1,7 +1,7 @@
 """Per-message CPU cost, from the simulator's frame bytes to a serialised ROS message (one process).
 
 Each case is one frame, packed exactly as the headless server (and the C++ server) packs it, taken through:
-- bridge: the bridge's receive loop decoding (`sim_link.decode_body`: large bodies straight into numpy
+- bridge: the bridge's receive loop decoding (`receive.decode_body`: large bodies straight into numpy
   arrays and pixel views), the bridge's converter and genpy serialisation;
 - client: the client's msgpack unpacking of the full frame, the bridge's converter, serialisation;
 - reference: the client's unpacking, the old bridge's algorithm (reference.py), serialisation;
@@ -26,7 +26,7 @@ from airsim_mapper.convert import registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.image import BufferImage
-from airsim_mapper.engine.sim_link import decode_body
+from airsim_mapper.engine.receive import decode_body
 from airsim_mapper.simserver import protocol
 from tools.bench import reference
 
@@ -176,7 +176,7 @@ def cpu_ms(fn: Callable[[], Any], repeat: int) -> float:
 
 
 def bridge_unpack(frame: bytes) -> Any:
-    """A frame's message as the bridge's receive loop decodes it (sim_link.receive -> decode_body)."""
+    """A frame's message as the bridge's receive loop decodes it (receive.receive -> decode_body)."""
     return decode_body(msgpack.unpackb(frame, raw=True)[2], fast=True)[0]
 
 

@@ -20,7 +20,7 @@ import threading
 from typing import Any
 
 from airsim_mapper.cli import node
-from airsim_mapper.engine import sim_link
+from airsim_mapper.engine import receive
 
 
 def profile_all_threads() -> list[cProfile.Profile]:
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     decode = _option(args, "--decode", "bridge")
     profile_path = _option(args, "--profile", None)
     if decode == "client":
-        sim_link.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
+        receive.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
     profiles = profile_all_threads() if profile_path else []
     try:
         return mission(args) if runner == "mission" else node.main([sys.argv[0], *args])

@@ -24,7 +24,7 @@ from airsim_mapper.simserver.protocol import (
 TOPICS = "/$topics"
 
 
-class FakeSim:
+class FakeSimServer:
     """Serve `scene_id`; every subscribed topic in `feeds` gets its frames in a cycle every `period` s."""
 
     def __init__(

@@ -1,0 +1,119 @@
+"""The bridge's receive loop on a client's topics socket, and what goes with it: decoding a frame's body
+(numpy fast path for large ones), taking over the thread of a client that started receiving itself, and
+closing a client at once. Frames go to the client's current link (`SimLink.dispatch`, sim_link.py), which
+this module never imports: the link starts the loop and registers itself on the client."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+import time
+from typing import Any
+
+from airsim_mapper.engine.fast_frames import decode_map
+
+__all__ = ["close_client", "decode_body", "receive", "take_over", "unknown_topic"]
+
+log = logging.getLogger("rosout.airsim_mapper.sim")
+FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
+RECEIVE_THREAD = "sim-receive"
+CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
+TAKE_OVER_WAIT_S = 1.0
+CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
+
+
+def decode_body(body: bytes, fast: bool) -> tuple[Any, bool]:
+    """The message of a frame body, and whether it took the fast path.
+
+    With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
+    straight into numpy (fast_frames.decode_map), skipping the per-element Python lists msgpack would
+    build (docs/performance.md has the cost), and its large bin values (image pixels) as memoryviews of
+    the body, which the image converter publishes without a copy. Everything else, and anything unusual,
+    takes msgpack's path, exactly as the client would.
+    """
+    import msgpack
+
+    if fast and len(body) >= FAST_MIN_BYTES:
+        try:
+            message = decode_map(body, views=True)
+        except Exception:
+            message = None
+        if message is not None:
+            return message, True
+    return msgpack.unpackb(body, raw=False), False
+
+
+def receive(client: Any) -> None:
+    """The bridge's receive loop on a client's topics socket, until the client stops or the socket closes.
+
+    Each frame goes to the client's current link (`SimLink.dispatch`): a malformed frame or a failing
+    callback is dropped and counted there, and the loop goes on.
+    """
+    import pynng
+
+    sock = client.socket_topics
+    while client.state:
+        try:
+            packed = sock.recv()
+        except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
+            continue
+        except pynng.exceptions.Closed:
+            return
+        except pynng.exceptions.NNGException as exc:
+            getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
+            continue
+        getattr(client, CURRENT_LINK).dispatch(packed)
+
+
+def take_over(client: Any) -> bool:
+    """Make the client's own receive thread run `receive`; True if it was not doing so already.
+
+    The client's loop reads each frame through its private `__recv_topic_frame` and then decodes and
+    dispatches it itself. An instance attribute of that name shadows the method: the thread's next read
+    enters `receive` and stays there until the client stops; the frame read before the swap is the
+    client's last, and this call waits for the swap. A client without that method (another version)
+    keeps its own loop, with a warning.
+    """
+    if getattr(client.recv_topic_thread, "name", "") == RECEIVE_THREAD or CLIENT_READ in vars(client):
+        return False
+    if not callable(getattr(type(client), CLIENT_READ, None)):
+        log.warning("this projectairsim client has no %s: its own receive loop stays in use", CLIENT_READ)
+        vars(client)[CLIENT_READ] = None  # warns once; a client without the method never reads it
+        return False
+
+    entered = threading.Event()
+
+    def read() -> None:
+        entered.set()
+        receive(client)
+        if client.state:  # the socket closed under a live client: the client's loop would spin
+            time.sleep(0.1)
+
+    vars(client)[CLIENT_READ] = read
+    # The client's thread reads again within its 100 ms receive timeout; until then a frame would still
+    # be the client's to decode, so the bridge subscribes nothing before the swap has happened.
+    if not entered.wait(TAKE_OVER_WAIT_S):
+        log.warning(
+            "the client's receive thread did not pick up the bridge's loop within %g s", TAKE_OVER_WAIT_S
+        )
+    return True
+
+
+def unknown_topic(topic: str) -> Any:
+    from projectairsim.types import ProjectAirSimTopic
+
+    return ProjectAirSimTopic(topic, "unknown", "unknown", 0)
+
+
+def close_client(client: Any) -> None:
+    """Close a client's sockets at once, without talking to the server; joins its receive thread."""
+    client.state = False  # ends the receive loop within its 100 ms receive timeout
+    thread = getattr(client, "recv_topic_thread", None)
+    if thread is not None and thread.is_alive() and thread is not threading.current_thread():
+        thread.join(timeout=2)
+    for name in ("socket_topics", "socket_services"):
+        sock = getattr(client, name, None)
+        if sock is not None:
+            with contextlib.suppress(Exception):
+                sock.close()
