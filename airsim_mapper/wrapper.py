@@ -73,7 +73,8 @@ class ProjectAirSimWrapper:
     Beyond that it changes nothing process-wide unless asked: with `tune_process=True` (what the node does)
     it limits numpy's OpenBLAS to one thread, lowers the interpreter's switch interval to 0.5 ms, makes
     every rospy publisher of the process send on the publishing thread when the socket takes the message
-    at once, and freezes the heap after each scene change (`gc.freeze`); engine/realtime.py explains why.
+    at once, watches rospy's connections without an open file per topic, and freezes the heap after each
+    scene change (`gc.freeze`); engine/realtime.py explains why.
     """
 
     def __init__(

@@ -164,6 +164,7 @@ class FakeRos:
     transforms: list = field(default_factory=list)
     static_transforms: dict = field(default_factory=dict)  # /tf_static, by child frame
     closed: bool = False
+    tf_cleared: int = 0  # forget_tf calls
     refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
     made: list[FakePublisher] = field(default_factory=list)  # every publisher ever made, in order
 
@@ -195,6 +196,9 @@ class FakeRos:
 
     def remove_static_tf(self, child: str) -> None:
         self.static_transforms.pop(child, None)
+
+    def forget_tf(self) -> None:
+        self.tf_cleared += 1
 
     def transform_pose(self, pose_stamped: Any, target: str) -> Any:
         """tf knows no frames here."""

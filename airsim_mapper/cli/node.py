@@ -33,6 +33,7 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from airsim_mapper.cli.errors import SettingError
+from airsim_mapper.cli.limits import raise_open_files, shortfall
 from airsim_mapper.cli.settings import SETTINGS, given_settings, resolve_settings, values
 from airsim_mapper.cli.startup import StartUp, Stopper, connect
 from airsim_mapper.errors import ConfigError
@@ -160,10 +161,21 @@ def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
     return reloader
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, early_signals: list[int] | None = None) -> int:
+    """The node; `early_signals` are those the script noted while it was importing this module."""
+    # First of all: until the node registers, a signal exits at once (reading the scene may take seconds on
+    # a busy machine), and from then on it only raises the flag that every step below checks. Before, one
+    # in the first second (imports, the mapping, init_node) ended in a traceback or the default action.
+    stop = Stopper(0.0, at_once=True)  # its deadline, --shutdown-timeout, is read before it can matter
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, stop)
+    for number in early_signals or ():
+        stop(number, None)
+    files_before, files = raise_open_files()
     import rospy
 
     args = parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])
+    stop.timeout = args.shutdown_timeout
     from airsim_mapper.cli.validate import format_table
 
     node_name, node_namespace = node_identity(args.nodename, sys.argv)  # rospy reads sys.argv's remappings
@@ -179,6 +191,7 @@ def main(argv: list[str] | None = None) -> int:
     # rospy runs its shutdown hooks inside its signal handler, on whatever the main thread was doing: a
     # SIGINT during a service registration ran the engine's shutdown while the registration lock was held,
     # and the node hung (seen in CI). Here the handler only raises a flag; the hooks run from the loop below.
+    stop.at_once = False  # rospy.init_node registers the node: a signal from now on shuts it down in order
     rospy.init_node(node_name, disable_signals=True)
     try:
         resolved = resolve_settings(given, rospy.get_param)  # KeyError when unset
@@ -193,13 +206,17 @@ def main(argv: list[str] | None = None) -> int:
     name = rospy.get_name().rsplit("/", 1)[-1]
     namespace = resolve_namespace(settings["namespace"], rospy.get_namespace())
     prepared, problem = config_problem(settings, name, namespace, early)
+    if stop:
+        rospy.signal_shutdown(f"signal {stop.signals[0]}")
+        return 0
     if problem:
         print(problem, file=sys.stderr)
         rospy.signal_shutdown("invalid configuration")
         return 1
-    stop = Stopper(args.shutdown_timeout)
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, stop)
+    if files != files_before:
+        log.info("open files: the soft limit raised from %d to the hard limit, %d", files_before, files)
+    if prepared.specs is not None and (shortage := shortfall(len(prepared.specs), files)):
+        log.warning(shortage)
 
     def stopping() -> bool:
         return bool(stop) or rospy.is_shutdown()
@@ -235,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def run() -> None:
+def run(early_signals: list[int] | None = None) -> None:
     """The script's entry: main(), then leave without interpreter finalisation.
 
     pynng's atexit hook calls nng_fini, and nng aborts ("panic: pthread_mutex_lock") when a client thread
@@ -243,7 +260,7 @@ def run() -> None:
     returns, ROS is shut down and the bridges are stopped; the logs are flushed and the process exits with
     main's status directly.
     """
-    code = main()
+    code = main(early_signals=early_signals)
     logging.shutdown()
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):

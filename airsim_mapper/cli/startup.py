@@ -32,13 +32,17 @@ log = ros_logger("airsim_mapper.node")
 
 class Stopper:
     """The node's signal handler: the first signal asks the main loop to stop and arms a deadline after
-    which the process exits anyway (status 1); a second signal exits at once (status 128 + signal)."""
+    which the process exits anyway (status 1); a second signal exits at once (status 128 + signal). With
+    `at_once`, while there is nothing to undo, a signal exits at once with status 0."""
 
-    def __init__(self, timeout: float) -> None:
+    def __init__(self, timeout: float, at_once: bool = False) -> None:
         self.timeout = timeout
         self.signals: list[int] = []
+        self.at_once = at_once  # nothing to undo yet (before rospy.init_node): exit at once, status 0
 
     def __call__(self, number: int, _frame: Any) -> None:
+        if self.at_once:
+            _say_and_exit(f"{signal.Signals(number).name} before the node registered: exiting", 0)
         if self.signals:
             _say_and_exit(f"second signal ({signal.Signals(number).name}): exiting at once", 128 + number)
         self.signals.append(number)

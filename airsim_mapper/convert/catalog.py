@@ -66,7 +66,7 @@ class ConverterInfo:
     after: str | None = None  # one of AFTER_HOOKS
     action: str | None = None  # one of ACTIONS (runner ACTION)
     example: Example | None = None  # what the property tests start from (every entry has one)
-    max_pixels: bool = False  # takes the rule's params.max_pixels (images)
+    max_pixels: bool = False  # takes the rule's params.max_pixels and params.max_bytes (images)
 
     @property
     def sim_kind(self) -> str:

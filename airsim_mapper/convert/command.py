@@ -17,7 +17,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -52,11 +52,17 @@ def _xyz(obj: Any, where: str) -> np.ndarray:
 
 
 def apply_limits(
-    velocity: np.ndarray, yaw_rate: float, limits: Any, name: str = "cmd_vel"
+    velocity: np.ndarray,
+    yaw_rate: float,
+    limits: Any,
+    name: str = "cmd_vel",
+    on_clamp: Callable[[str], None] | None = None,
 ) -> tuple[np.ndarray, float]:
-    """Bound (vx, vy, vz) and the yaw rate by a model.Limits (None = unbounded)."""
+    """Bound (vx, vy, vz) and the yaw rate by a model.Limits (None = unbounded); `on_clamp` is told
+    each limit that changed the command."""
     if limits is None:
         return velocity, yaw_rate
+    clamped: list[str] = []
     mode = getattr(limits, "on_violation", CLAMP)
     if mode not in (CLAMP, REJECT):
         raise ConversionError(f"{name}: on_violation must be {CLAMP!r} or {REJECT!r}, got {mode!r}")
@@ -67,6 +73,7 @@ def apply_limits(
             raise ConversionError(
                 f"{name}: vertical speed {abs(velocity[2]):g} m/s exceeds max_vertical_speed {max_vz:g} m/s"
             )
+        clamped.append(f"vertical speed {abs(velocity[2]):g} m/s to max_vertical_speed {max_vz:g}")
         velocity[2] = math.copysign(max_vz, velocity[2])
     max_speed = limits.max_linear_speed
     speed = math.hypot(*velocity)  # no overflow: np.linalg.norm squares 1e308 into inf
@@ -75,6 +82,7 @@ def apply_limits(
             raise ConversionError(
                 f"{name}: linear speed {speed:g} m/s exceeds max_linear_speed {max_speed:g} m/s"
             )
+        clamped.append(f"linear speed {speed:g} m/s to max_linear_speed {max_speed:g}")
         velocity *= max_speed / speed
     max_yaw = limits.max_yaw_rate
     if max_yaw is not None and abs(yaw_rate) > max_yaw:
@@ -82,24 +90,30 @@ def apply_limits(
             raise ConversionError(
                 f"{name}: yaw rate {abs(yaw_rate):g} rad/s exceeds max_yaw_rate {max_yaw:g} rad/s"
             )
+        clamped.append(f"yaw rate {abs(yaw_rate):g} rad/s to max_yaw_rate {max_yaw:g}")
         yaw_rate = math.copysign(max_yaw, yaw_rate)
+    if clamped and on_clamp is not None:
+        on_clamp(f"{name}: clamped " + ", ".join(clamped))
     return velocity, yaw_rate
 
 
-def apply_position_box(position: np.ndarray, limits: Any, name: str) -> np.ndarray:
-    """Keep a commanded position inside limits.position_box: clamp it there or reject it."""
+def apply_position_box(
+    position: np.ndarray, limits: Any, name: str, on_clamp: Callable[[str], None] | None = None
+) -> np.ndarray:
+    """Keep a commanded position inside limits.position_box: clamp it there (telling `on_clamp`) or
+    reject it."""
     box = getattr(limits, "position_box", None)
     if box is None:
         return position
     low, high = np.asarray(box.min, dtype=float), np.asarray(box.max, dtype=float)
     if np.all((low <= position) & (position <= high)):
         return position
+    where = ", ".join(f"{v:g}" for v in position)
+    box_text = f"[{', '.join(f'{v:g}' for v in low)}] .. [{', '.join(f'{v:g}' for v in high)}]"
     if getattr(limits, "on_violation", CLAMP) == REJECT:
-        where = ", ".join(f"{v:g}" for v in position)
-        raise ConversionError(
-            f"{name}: position ({where}) is outside the position box "
-            f"[{', '.join(f'{v:g}' for v in low)}] .. [{', '.join(f'{v:g}' for v in high)}]"
-        )
+        raise ConversionError(f"{name}: position ({where}) is outside the position box {box_text}")
+    if on_clamp is not None:
+        on_clamp(f"{name}: clamped position ({where}) into the position box {box_text}")
     return np.clip(position, low, high)
 
 
@@ -133,7 +147,8 @@ def cmd_vel(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
     if ctx.enu:
         velocity = frames.flu_to_frd(velocity)
         yaw_rate = -yaw_rate
-    velocity, yaw_rate = apply_limits(velocity, yaw_rate, getattr(ctx.options, "limits", None))
+    limits = getattr(ctx.options, "limits", None)
+    velocity, yaw_rate = apply_limits(velocity, yaw_rate, limits, on_clamp=ctx.clamped)
     vx, vy, vz = (float(v) for v in velocity)
     return {
         "vx": vx,
@@ -152,7 +167,7 @@ def _check_frame(msg: Any, ctx: ConvertContext) -> None:
     accepted = ctx.params.get("accepted_frames", ("", target) if target else DEFAULT_ACCEPTED_FRAMES)
     if frame_id and frame_id.removeprefix("/") not in {str(name).removeprefix("/") for name in accepted}:
         raise ConversionError(
-            f"header.frame_id {frame_id!r} is not accepted; expected one of {sorted(set(accepted))}"
+            f"header.frame_id {shorten(frame_id)!r} is not accepted; expected one of {sorted(set(accepted))}"
         )
 
 
@@ -172,7 +187,7 @@ def ros_quaternion(q: Any) -> np.ndarray:
 def _pose_in(msg: Any, ctx: ConvertContext, name: str) -> tuple[np.ndarray, np.ndarray]:
     _check_frame(msg, ctx)
     position = _xyz(msg.pose.position, "position")
-    position = apply_position_box(position, getattr(ctx.options, "limits", None), name)
+    position = apply_position_box(position, getattr(ctx.options, "limits", None), name, ctx.clamped)
     return position, ros_quaternion(msg.pose.orientation)
 
 

@@ -39,6 +39,8 @@ class ConvertContext:
     - mounts: read-only, the camera mounts commanded since the scene loaded, keyed
       ``convert.pose.camera_pose_key(robot_name, camera_name)`` (engine/mounts.py owns them).
     - state: this bridge's own memory across messages (each bridge gets a fresh dict).
+    - on_clamp: told what a command converter changed to keep a command within its limits (the engine
+      counts and warns); None ignores it.
     """
 
     frame_id: str = ""
@@ -51,6 +53,7 @@ class ConvertContext:
     options: Any = None
     mounts: Mapping[Any, Any] = field(default_factory=dict)
     state: MutableMapping[Any, Any] = field(default_factory=dict)
+    on_clamp: Callable[[str], None] | None = None
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -61,3 +64,8 @@ class ConvertContext:
     @property
     def enu(self) -> bool:
         return self.convention == ENU
+
+    def clamped(self, what: str) -> None:
+        """A command was changed to keep it within its limits: say what (see `on_clamp`)."""
+        if self.on_clamp is not None:
+            self.on_clamp(what)

@@ -7,7 +7,9 @@ metres, ``GRAY8`` -> mono8, and the git server's ``32FC1`` (pixels in ``data`` o
 float16 -> float32 uses OpenCV's SIMD conversion (bit-exact with numpy's astype, and faster).
 
 Bounds, checked before any pixel is converted: an image with no pixels (0xN) is dropped; one over
-``max_pixels`` (the rule's ``params.max_pixels``, default MAX_PIXELS) raises OversizedData. A PNG's own
+``max_pixels`` (the rule's ``params.max_pixels``, default MAX_PIXELS) raises OversizedData, and so does
+one whose converted pixels would take more than ``params.max_bytes`` (default MAX_BYTES): a 7000x7000
+colour PNG of 155 kB is under the pixel cap, but decodes into 147 MB. A PNG's own
 size is read from its IHDR header and must be the declared one, so a small compressed file cannot decode
 into an image far larger than the message says.
 
@@ -49,6 +51,7 @@ ENCODINGS: dict[str, Encoding] = {
 }
 MM_PER_M = 1000.0
 MAX_PIXELS = 50_000_000  # per image; an 8K frame has 33 million
+MAX_BYTES = 100_000_000  # converted pixels per image; an 8K colour frame has 99.5 million
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PNG_IHDR = struct.Struct(">I4sII")  # the first chunk: length, b"IHDR", width, height
 
@@ -206,6 +209,12 @@ def image(msg: Mapping[str, Any], ctx: ConvertContext) -> Image:
     limit = ctx.params.get("max_pixels", MAX_PIXELS)
     if height * width > limit:
         raise OversizedData(f"image: {width}x{height} is over the limit of {limit} pixels (max_pixels)")
+    byte_limit = ctx.params.get("max_bytes", MAX_BYTES)
+    if height * width * spec.out_bytes > byte_limit:
+        raise OversizedData(
+            f"image: {width}x{height} {spec.ros} takes {height * width * spec.out_bytes} bytes, over the "
+            f"limit of {byte_limit} (max_bytes)"
+        )
     order = ">" if msg.get("big_endian", False) else "<"
     data = _payload(msg, encoding)
     if encoding == "PNG":

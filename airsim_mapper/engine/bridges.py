@@ -29,11 +29,12 @@ from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_fro
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.geometry import q_conjugate, q_mul, q_rotate
-from airsim_mapper.logs import RateLimitedLog, ros_logger
+from airsim_mapper.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.mapping.model import BridgeSpec
 
 log = ros_logger("airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
+SHOWN_ERROR = 500  # characters of a refusal that a log line and the status show
 
 
 @dataclass
@@ -44,6 +45,7 @@ class BridgeStats:
     last_time: float = 0.0  # time.monotonic() of the last message
     last_error: str = ""
     stale_dropped: int = 0  # messages taken before a lazy bridge attached (the simulator's cached frame)
+    clamped: int = 0  # commands changed to keep them within their limits
 
 
 @dataclass
@@ -57,12 +59,14 @@ class Services:
     node_action: Callable[[str, dict], Any]  # an engine action by its catalogue name (load_scene)
     streaming: list[StreamingImage] = field(default_factory=list)  # the running streaming-image bridges
     counts: FrameCounts = field(default_factory=FrameCounts)  # refused simulator frames, node-wide
-    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # /clock going backwards
+    sim_time: SimTimeWatch = field(default_factory=SimTimeWatch)  # simulation time going backwards
     # Per ROS topic, what its engine action (load_scene) last acted on: outlives a re-created subscriber.
     replays: dict[str, LatchedReplays] = field(default_factory=dict)
 
 
-def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
+def make_context(
+    spec: BridgeSpec, services: Services, on_clamp: Callable[[str], None] | None = None
+) -> ConvertContext:
     return ConvertContext(
         frame_id=spec.frame_id or "",
         convention=spec.convention,
@@ -73,6 +77,7 @@ def make_context(spec: BridgeSpec, services: Services) -> ConvertContext:
         variables=spec.variables,
         options=spec.options,
         mounts=services.mounts,
+        on_clamp=on_clamp,
     )
 
 
@@ -85,7 +90,7 @@ class Bridge:
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
         self.warn = RateLimitedLog(log, WARN_PERIOD_S, prefix=spec.name).warn
-        self.ctx = make_context(spec, services)
+        self.ctx = make_context(spec, services, self.clamped)
 
     def after_call(self, params: dict, result: Any) -> None:
         """The catalogue's after-hook, once the simulator accepted a call (a result other than false)."""
@@ -99,8 +104,9 @@ class Bridge:
         raise NotImplementedError
 
     def fail(self, message: str, exc: BaseException | None = None) -> None:
-        """Count a bridge error and log it (rate-limited); `exc`, an unexpected exception, with its
-        traceback."""
+        """Count a bridge error and log it (rate-limited), cut to SHOWN_ERROR characters (a refused 10 MB
+        frame name is not logged in full); `exc`, an unexpected exception, with its traceback."""
+        message = shorten(message, SHOWN_ERROR)
         self.stats.errors += 1
         self.stats.last_error = message
         self.warn(message, exc)
@@ -108,6 +114,11 @@ class Bridge:
     def failed(self, what: str, exc: BaseException) -> None:
         """An exception no converter should raise (a bug): a bridge error, logged with its traceback."""
         self.fail(f"{what}: {type(exc).__name__}: {exc}", exc)
+
+    def clamped(self, what: str) -> None:
+        """A command was clamped to its limits: counted, and warned like a refusal (throttled)."""
+        self.stats.clamped += 1
+        self.warn(shorten(what, SHOWN_ERROR))
 
 
 class SimToRos(Bridge):
@@ -123,7 +134,6 @@ class SimToRos(Bridge):
         self._min_period = 1.0 / spec.options.rate_limit_hz if spec.options.rate_limit_hz else 0.0
         self._last_publish = -1e9
         self.topic = spec.sim
-        self._is_clock = spec.ros_type == "rosgraph_msgs/Clock"  # what /use_sim_time nodes follow
         # Lazy and "fresh": after attaching, messages taken before this simulator time (ns) are dropped.
         self._fresh_after = 0
 
@@ -194,8 +204,6 @@ class SimToRos(Bridge):
                 return None
         self.stats.messages += 1
         self.stats.last_time = now
-        if self._is_clock:
-            self.services.sim_time.observe(out.clock.to_nsec(), now)
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp
@@ -206,6 +214,10 @@ class SimToRos(Bridge):
         except (ConversionError, KeyError, TypeError, AttributeError) as exc:  # no usable pose in it
             self.fail(f"no transform from a message on {self.topic}: {type(exc).__name__}: {exc}")
             return None
+
+    def new_session(self) -> None:
+        """The simulator's time started over: a stale filter waiting for the old time stops waiting."""
+        self._fresh_after = 0
 
     def _stale(self, message: Any) -> bool:
         """A message taken before the bridge attached (the simulator's cached last frame): dropped and

@@ -49,6 +49,7 @@ def bridge_status(bridge: Bridge, seen: _Seen, now: float, drops: int, prefix: s
         "errors": str(stats.errors),
         "drops": str(drops),
         "stale_dropped": str(stats.stale_dropped),  # the simulator's cached frames at subscription
+        "clamped": str(stats.clamped),  # commands changed to keep them within their limits
         "last_message_age_s": "" if age is None else f"{age:.3f}",
     }
     return {"name": f"{prefix}{spec.name}", "level": level, "message": message, "values": values}

@@ -22,7 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services
+from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services, SimToRos
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
@@ -80,9 +80,13 @@ class Engine:
         self._link = link
         self.sim = self.make_link(client)
         self.ros = ros or RosLink()
-        self.hub = StreamHub(self.sim, self.ros.send_tf)
+        # Every frame's stamp feeds the time watch; a jump back starts what depends on the old time over.
+        self.sim_time = SimTimeWatch(
+            warn=RateLimitedLog(bridge_log, WARN_PERIOD_S, prefix="sim time").warn,
+            on_jump=self._time_went_back,
+        )
+        self.hub = StreamHub(self.sim, self.ros.send_tf, on_stamp=self.sim_time.observe)
         self.mounts = CameraMounts()
-        self.sim_time = SimTimeWatch(warn=RateLimitedLog(bridge_log, WARN_PERIOD_S, prefix="sim time").warn)
         self.services = Services(
             self.sim,
             self.hub,
@@ -215,8 +219,9 @@ class Engine:
                     log.exception("stopping %s failed", name)
             self._start_bridges(specs, {*diff.added, *diff.changed})
             if self._freeze_heap:
-                # No full collection here (freeze_heap's would stop every running bridge for tens of ms):
-                # the new objects join the frozen heap as they are; the stopped bridges' cycles stay.
+                # No full collection here (freeze_heap's would stop every running bridge for tens of ms, and
+                # 50-130 ms on a busy machine): the new objects join the frozen heap as they are, and the
+                # stopped bridges' cycles stay (about 38 kB an edit, docs/reliability.md).
                 gc.freeze()
                 self.gc_frozen = gc.get_freeze_count()
         return diff
@@ -314,9 +319,26 @@ class Engine:
         return self._link(client, self.frame_counts)
 
     def swap_link(self, link: SimLink, client: Any, world: Any) -> None:
-        """Run every bridge over `link` from now on (under the lock: the supervisor's reconnect)."""
+        """Run every bridge over `link` from now on (under the lock: the supervisor's reconnect). The new
+        simulator's clock started over: the old one's stamps no longer say what is stale."""
         self.client, self.sim, self.services.sim, self.world = client, link, link, world
+        self._start_over()
         self.hub.rebind(link)
+
+    # --- a new simulator session ------------------------------------------------------------
+    def _time_went_back(self, jump_s: float) -> None:
+        """The time watch saw the simulator's clock go back (a restart, or a scene loaded again): tf and
+        the lazy streams' stale filters start over. Runs on the receive thread: takes no engine lock."""
+        self._start_over()
+        self.ros.forget_tf()
+        log.info("simulation time went back %.3f s: tf buffer cleared, stale filters reset", jump_s)
+
+    def _start_over(self) -> None:
+        """Forget the old session's stamps: the streams' newest, and each stale filter's wait."""
+        self.hub.forget_stamps()
+        for bridge in list(self.bridges.values()):
+            if isinstance(bridge, SimToRos):
+                bridge.new_session()
 
     # --- shutdown --------------------------------------------------------------
     def shutdown(self, timeout: float = SHUTDOWN_TIMEOUT_S, client_topics: bool = False) -> bool:

@@ -18,9 +18,15 @@ class StreamHub:
     subscription changes therefore go one at a time: an attach waits for the unsubscribe's reply.
     """
 
-    def __init__(self, sim: SimLink, on_transforms: Callable[[list], None]) -> None:
+    def __init__(
+        self,
+        sim: SimLink,
+        on_transforms: Callable[[list], None],
+        on_stamp: Callable[[int, float], object] | None = None,
+    ) -> None:
         self._sim = sim
         self._on_transforms = on_transforms
+        self._on_stamp = on_stamp  # every stream's stamps (the time watch)
         self._streams: dict[str, Stream] = {}
         self._lock = threading.Lock()
         self._topic_locks: dict[str, threading.Lock] = {}  # one per topic ever attached: a bounded set
@@ -37,7 +43,7 @@ class StreamHub:
                 if stream is not None:
                     stream.handlers = [*stream.handlers, handler]
                     return
-                stream = Stream(topic, self._on_transforms, [handler])
+                stream = Stream(topic, self._on_transforms, [handler], on_stamp=self._on_stamp)
                 self._streams[topic] = stream
                 sim = self._sim
             sim.subscribe(topic, stream.offer)
@@ -63,6 +69,12 @@ class StreamHub:
         with self._lock:
             streams = list(self._streams.values())
         return max((s.stats.newest_stamp for s in streams), default=0)
+
+    def forget_stamps(self) -> None:
+        """A new simulator session: the old session's newest stamps no longer say what is stale. Called
+        from the receive thread, so it takes no lock (`rebind` holds the hub's while it subscribes)."""
+        for stream in list(self._streams.values()):
+            stream.stats.newest_stamp = 0
 
     def streams(self) -> dict[str, Stream]:
         with self._lock:

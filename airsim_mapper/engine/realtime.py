@@ -20,6 +20,7 @@ import rospy
 import rospy.topics
 from rospy.impl.tcpros_pubsub import QueuedConnection
 
+from airsim_mapper.engine.ros_link import ConnectionPoll
 from airsim_mapper.tuning import tune_threads
 
 
@@ -99,7 +100,10 @@ class PromptQueuedConnection(QueuedConnection):
 def tune_process() -> None:
     """Apply the thread settings and prompt publishing to this process (idempotent).
 
-    The node applies them; a mission script's wrapper only with `tune_process=True`."""
+    The node applies them; a mission script's wrapper only with `tune_process=True`. rospy's topics also
+    watch their connections without an open file of their own (`ConnectionPoll`): with the heap frozen,
+    the one rospy makes would outlive every topic."""
+    rospy.topics.Poller = ConnectionPoll
     if tune_threads():
         rospy.topics.QueuedConnection = PromptQueuedConnection
 

@@ -4,17 +4,21 @@ subscribers, services, the clock) and batched tf."""
 from __future__ import annotations
 
 import importlib
+import select
 import threading
 from collections.abc import Callable
 from typing import Any
 
 import rospy
+import rospy.topics
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.logs import shorten
 from airsim_mapper.ros_types import generated_kind
 
+CLEAR_AGAIN_S = 1.0  # tf's buffer is cleared once more this long after a jump back in time
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
 
 
@@ -145,8 +149,28 @@ class RosLink:
         """A PoseStamped in the `target` frame, through tf (FrameUnknown when tf cannot)."""
         return self.frames.transform_pose(pose_stamped, target)
 
+    def forget_tf(self) -> None:
+        """Simulation time started over: the transforms of the old time go (`TfLookup.clear`)."""
+        self.frames.clear()
+
     def close(self) -> None:
         self.frames.close()
+
+
+class ConnectionPoll(rospy.topics.Poller):
+    """rospy's per-topic watch for dead connections, on poll(2) instead of an epoll: no open file per topic.
+
+    rospy gives every topic an epoll object and never closes it; it goes only when the topic is collected,
+    which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
+    1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
+    `realtime.tune_process` installs it for every topic made afterwards, with the frozen heap.
+    """
+
+    def __init__(self) -> None:  # rospy's own choice when a platform has no epoll
+        self.poller = select.poll()
+        self.add_fd = self.add_poll
+        self.remove_fd = self.remove_poll
+        self.error_iter = self.error_poll_iter
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:
@@ -166,7 +190,9 @@ class FrameUnknown(EngineError, LookupError):
     """tf cannot transform a message's frame into the frame a command needs."""
 
     def __init__(self, source: str, target: str, why: str) -> None:
-        super().__init__(f"frame {source!r} cannot be transformed into {target!r} with tf: {why}")
+        super().__init__(
+            f"frame {shorten(source)!r} cannot be transformed into {shorten(target)!r} with tf: {why}"
+        )
 
 
 class TfLookup:
@@ -202,6 +228,20 @@ class TfLookup:
         except tf2_ros.TransformException as exc:
             raise FrameUnknown(source, target, str(exc).splitlines()[0][:200]) from None
         return moved_pose(pose_stamped, transform)
+
+    def clear(self) -> None:
+        """Drop every transform, now and again after CLEAR_AGAIN_S: the node's own /tf messages of the old
+        time still on their way would otherwise fill the buffer again, and tf refuses data more than its
+        cache time older than what it holds (TF_OLD_DATA, on every new transform until the new time passes
+        the old)."""
+        with self._lock:
+            buffer = self._buffer
+        if buffer is None:
+            return
+        buffer.clear()
+        again = threading.Timer(CLEAR_AGAIN_S, buffer.clear)
+        again.daemon = True
+        again.start()
 
     def close(self) -> None:
         with self._lock:

@@ -26,6 +26,7 @@ from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
+IMAGE_BOUNDS = ("max_pixels", "max_bytes")  # what a converter marked max_pixels in the catalogue takes
 
 
 class _Checker:
@@ -140,19 +141,21 @@ class _Checker:
     def _options(self, rule: Rule, base: tuple[Any, ...]) -> None:
         raw = self.data["rules"][base[1]]
         self.position_box(base, raw.get("limits"), f"rule '{rule.name}'")
-        if "max_pixels" in rule.params:
-            value = rule.params["max_pixels"]
+        for key in IMAGE_BOUNDS:
+            if key not in rule.params:
+                continue
+            value = rule.params[key]
             info = catalog.find(rule.converter)
             if info is None or not info.max_pixels:
                 self.add(
-                    (*base, "params", "max_pixels"),
-                    f"rule '{rule.name}': params.max_pixels applies only to the image converters",
+                    (*base, "params", key),
+                    f"rule '{rule.name}': params.{key} applies only to the image converters",
                     True,
                 )
             elif isinstance(value, bool) or not isinstance(value, int) or value <= 0:
                 self.add(
-                    (*base, "params", "max_pixels"),
-                    f"rule '{rule.name}': params.max_pixels must be a positive integer, got {value!r}",
+                    (*base, "params", key),
+                    f"rule '{rule.name}': params.{key} must be a positive integer, got {value!r}",
                 )
         if rule.direction == SIM_TO_ROS:
             for key in ("watchdog_s", "limits"):

@@ -304,3 +304,15 @@ def test_the_real_servers_empty_images_are_rejected_naming_what_is_missing():
         image(sim_image("16FC1", b"", 320, 240), CTX)
     with pytest.raises(ConversionError, match=r"image: PNG data is empty"):
         image(sim_image("PNG", [], 320, 240), CTX)
+
+
+def test_an_image_whose_pixels_would_take_over_max_bytes_is_oversized_before_decoding(monkeypatch):
+    monkeypatch.setattr(cv2, "imdecode", lambda *_: pytest.fail("decoded"))
+    assert MAX_PIXELS > 7000 * 7000  # under the pixel cap, but 147 MB once decoded
+    over = r"7000x7000 bgr8 takes 147000000 bytes, over the limit of 100000000"
+    with pytest.raises(OversizedData, match=over):
+        image(sim_image("PNG", png_claiming(7000, 7000), 7000, 7000), CTX)
+    ctx = ConvertContext(params={"max_bytes": 47})
+    with pytest.raises(OversizedData, match=r"4x3 32FC1 takes 48 bytes, over the limit of 47 \(max_bytes\)"):
+        image(sim_image("16FC1", bytes(24), 4, 3), ctx)
+    assert image(sim_image("16FC1", bytes(24), 4, 3), ConvertContext(params={"max_bytes": 48})).width == 4

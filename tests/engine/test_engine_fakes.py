@@ -189,3 +189,26 @@ def test_a_reload_taking_a_name_the_node_owns_is_refused_whole(rig, tmp_path):
         f"{mine}:4:1: bridge extra_pose[Drone1]: ROS name '/node/reload_mapping' belongs to the node's "
         "private service ~reload_mapping; a rule cannot take it",
     )
+
+
+def test_time_going_back_in_the_pose_stream_starts_tf_and_the_stale_filters_over(rig: EngineRig, caplog):
+    rig.engine.load_scene(SCENE)
+    pose = "/Sim/SceneDroneSensors/robots/Drone1/actual_pose"
+    sim = rig.links[-1]
+    message = {
+        "time_stamp": 0,
+        "pose": {
+            "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+        },
+    }
+    for seconds in (60, 61, 62):  # the old session; nobody subscribes to /clock
+        assert sim.deliver(pose, {**message, "time_stamp": seconds * 1_000_000_000}) == 1
+    imu = rig.engine.bridges["imu[Drone1/IMU1]"]
+    rig.ros.publishers[IMU_ROS].subscribers(1)  # a lazy bridge attaching waits for time after 62 s
+    assert imu._fresh_after >= 62_000_000_000
+    with caplog.at_level("INFO"):
+        sim.deliver(pose, {**message, "time_stamp": 1_000_000_000})  # the simulator restarted its clock
+    assert rig.engine.sim_time.jumps_back == 1 and rig.ros.tf_cleared == 1
+    assert imu._fresh_after == 0 and rig.engine.hub.sim_now() <= 1_000_000_000
+    assert "tf buffer cleared" in caplog.text

@@ -85,3 +85,19 @@ def test_an_attach_waits_for_an_unsubscribe_in_flight_so_the_server_sees_them_in
     coming.join(5)
     assert sim.order == ["subscribe", "subscribe", "unsubscribe", "subscribe"]  # /cam, /other, /cam, /cam
     assert hub.streams()["/cam"].handlers == [info.handle] and len(sim.callbacks["/cam"]) == 1
+
+
+def test_every_streams_stamps_reach_the_time_watch_and_a_new_session_forgets_the_newest() -> None:
+    sim, seen = RecordingLink(), []
+    hub = StreamHub(sim, lambda _tf: None, on_stamp=lambda stamp, _now: seen.append(stamp))
+    bridges = [Bridge(), Bridge()]
+    hub.attach("/a", bridges[0].handle)
+    hub.attach("/b", bridges[1].handle)
+    for topic, stamps in (("/a", (50, 60)), ("/b", (55, 65))):
+        for stamp in stamps:
+            sim.callbacks[topic][0](None, {"time_stamp": stamp})
+    assert seen == [60, 65] and hub.sim_now() == 65
+    hub.forget_stamps()  # the stale filter of a lazy bridge attaching now waits for no old time
+    assert hub.sim_now() == 0
+    for bridge in bridges:
+        hub.detach("/a" if bridge is bridges[0] else "/b", bridge.handle)

@@ -3,6 +3,7 @@ detach as ROS subscribers come and go, and the command watchdog. No simulator, n
 
 from __future__ import annotations
 
+import logging
 import time
 
 import pytest
@@ -152,6 +153,39 @@ def test_load_scene_asks_the_engine_for_its_action(specs, services, sim, ros):
     ros.subscribers[spec.ros].handler(String(data=" scene_basic_drone.jsonc "))
     assert services.actions == [("load_scene", {"scene": "scene_basic_drone.jsonc"})]
     assert sim.calls == [] and sim.published == []
+
+
+def test_a_clamped_command_is_counted_and_warned_at_most_once_per_period(specs, services, sim, ros, caplog):
+    spec = spec_of(specs, "cmd_vel[Drone1]")
+    assert spec.options.limits.on_violation == "clamp"
+    bridge = build(spec, services)
+    bridge.start()
+    twist = Twist()
+    twist.linear.x = 1e308
+    with caplog.at_level(logging.WARNING, logger="rosout.airsim_mapper.bridge"):
+        for _ in range(3):
+            ros.subscribers[spec.ros].handler(twist)
+    top = spec.options.limits.max_linear_speed
+    assert len(sim.calls) == 3 and sim.calls[0][1]["vx"] == pytest.approx(top)
+    assert bridge.stats.clamped == 3 and bridge.stats.errors == 0
+    warnings = [r.getMessage() for r in caplog.records]
+    assert len(warnings) == 1 and "clamped linear speed 1e+308 m/s to max_linear_speed 20" in warnings[0]
+
+
+def test_a_goal_in_a_huge_frame_is_refused_with_the_frame_cut_short(specs, services, sim, ros, caplog):
+    spec = spec_of(specs, "desired_pose[Drone1]")
+    bridge = build(spec, services)
+    bridge.start()
+    goal = PoseStamped()
+    goal.header.frame_id = "x" * 10_000_000
+    goal.pose.orientation.w = 1.0
+    with caplog.at_level(logging.WARNING, logger="rosout.airsim_mapper.bridge"):
+        for _ in range(5):
+            ros.subscribers[spec.ros].handler(goal)
+    assert sim.calls == [] and bridge.stats.errors == 5
+    warnings = [r.getMessage() for r in caplog.records]
+    assert len(warnings) == 1 and len(warnings[0]) < 1000 and "more)" in warnings[0]
+    assert len(bridge.stats.last_error) < 1000  # the status topic and /diagnostics show it too
 
 
 def test_a_converter_that_raises_something_else_is_a_bridge_error_logged_with_its_traceback(

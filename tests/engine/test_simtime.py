@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from airsim_mapper.engine.simtime import RECENT_S, SimTimeWatch
+from airsim_mapper.engine.simtime import RECENT_S, TOLERANCE_NS, SimTimeWatch
+from airsim_mapper.engine.streams import Stream
 
 S = 1_000_000_000
 
@@ -32,3 +33,25 @@ def test_the_latest_jump_is_reported_while_it_is_recent():
     watch.observe(1 * S, 100.0)
     assert watch.recent(104.0) == "simulation time went back 8.000 s 4 s ago (1 jumps back in all)"
     assert watch.recent(100.0 + RECENT_S + 1) == ""
+
+
+def test_frames_of_interleaved_topics_a_little_out_of_order_are_no_jump_and_each_jump_is_told():
+    told: list[float] = []
+    watch = SimTimeWatch(on_jump=told.append)
+    watch.observe(10 * S, 0.0)
+    assert watch.observe(10 * S - TOLERANCE_NS, 0.0) is None  # another topic's frame, a step behind
+    assert watch.last_ns == 10 * S  # the newest stays the reference
+    assert watch.observe(1 * S, 1.0) == 9.0
+    assert told == [9.0] and watch.last_ns == 1 * S
+
+
+def test_a_stream_tells_every_stamp_but_its_first_which_may_be_the_simulators_cached_frame():
+    seen: list[int] = []
+    stream = Stream("/t", on_stamp=lambda stamp, _now: seen.append(stamp))
+    try:
+        for stamp in (5, 1, 2, "x"):
+            stream.offer(None, {"time_stamp": stamp})
+        stream.offer(None, b"no stamp")
+    finally:
+        stream.stop()
+    assert seen == [1, 2]

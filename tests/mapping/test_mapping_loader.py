@@ -203,6 +203,15 @@ def test_an_image_rule_may_bound_its_pixels_and_a_bad_bound_is_a_located_error()
     )
 
 
+def test_an_image_rule_may_bound_its_converted_bytes_and_a_bad_bound_is_a_located_error():
+    text = IMAGE_RULE.replace("max_pixels: PIXELS", "max_bytes: BYTES")
+    rule = load_mapping_text(text.replace("BYTES", "4000000"), "m.yaml").rules[0]
+    assert rule.params["max_bytes"] == 4_000_000
+    with pytest.raises(MappingError) as err:
+        load_mapping_text(text.replace("BYTES", "-1"), "m.yaml")
+    assert str(err.value).startswith("m.yaml:11:25: rule 'camera_image': params.max_bytes must be a positive")
+
+
 def test_a_fifo_given_as_mapping_is_refused_at_once(tmp_path):
     import os
 

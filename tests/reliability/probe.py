@@ -11,6 +11,8 @@ probe.py trials TOPIC N VX SERVICESPORT ROBOT   watchdog trials: print "TRIAL <s
 probe.py bad ROBOT_PREFIX CAMERA  publish malformed cmd_vel and desired_pose messages, print "SENT <n>"
 probe.py strings TOPIC DATA...  publish each DATA as a std_msgs/String, 0.5 s apart, then print "SENT"
 probe.py huge TOPIC N SIZE      publish N distinct std_msgs/String of SIZE characters, 0.05 s apart, "SENT"
+probe.py stamped TOPIC...      print "T <index> <monotonic time> <stamp>" for every message on each TOPIC (any
+                               type with a header first, or /clock); the stamp is read from the raw bytes
 """
 
 from __future__ import annotations
@@ -33,6 +35,24 @@ def connected(pub: rospy.Publisher, timeout: float = 20.0) -> None:
 
 def watch(topic: str) -> None:
     rospy.Subscriber(topic, rospy.AnyMsg, lambda _m: print(f"MSG {time.time():.4f}", flush=True))
+    print("READY", flush=True)
+    rospy.spin()
+
+
+def stamped(topics: list[str]) -> None:
+    """Receive times and stamps of any stamped message, without deserializing it (images included)."""
+    import struct
+
+    def on_message(index: int, offset: int):
+        def show(message: rospy.AnyMsg) -> None:
+            secs, nsecs = struct.unpack_from("<II", message._buff, offset)
+            print(f"T {index} {time.monotonic():.6f} {secs + nsecs * 1e-9:.6f}", flush=True)
+
+        return show
+
+    for index, topic in enumerate(topics):
+        offset = 0 if topic.endswith("/clock") else 4  # Clock is the time itself; a Header has seq first
+        rospy.Subscriber(topic, rospy.AnyMsg, on_message(index, offset), queue_size=100, tcp_nodelay=True)
     print("READY", flush=True)
     rospy.spin()
 
@@ -209,6 +229,8 @@ def main(argv: list[str]) -> None:
         huge(args[0], int(args[1]), int(args[2]))
     elif mode == "strings":
         strings(args[0], args[1:])
+    elif mode == "stamped":
+        stamped(args)
     elif mode == "trials":
         trials(args[0], int(args[1]), float(args[2]), int(args[3]), args[4])
     else:

@@ -3,6 +3,8 @@ frame of an unknown type are each dropped and counted, the node's memory stays s
 
 from __future__ import annotations
 
+import time
+
 import cv2
 import msgpack
 import numpy as np
@@ -99,3 +101,32 @@ def test_oversized_and_empty_images_are_dropped_and_counted_and_memory_stays_sma
     )
     assert "Traceback" not in log
     assert node.alive()
+
+
+def test_memory_returns_after_large_images(launcher: Rig, ros_master: RosMaster):
+    good = message_frame(CAMERA, camera_image("BGR", bytes(4 * 3 * 3), 4, 3))
+    side = 5770  # 99.9 MB once decoded: just under the byte cap
+    large = cv2.imencode(".png", np.full((side, side, 3), 7, dtype=np.uint8))[1].tobytes()
+    ports = SimPorts.free()
+    sim = FakeSimServer("127.0.0.1", ports.topics, ports.services, "SceneDroneSensors", {CAMERA: [good]})
+    try:
+        node = start_node(launcher, ports, "--scene", "scene_drone_sensors.jsonc")
+        images = probe(launcher, "image", "watch", IMAGE)
+        wait_until(lambda: len(stamps(images)) > 20, 60, what="small images")
+        time.sleep(2.0)
+        before = rss_mb(node.pid)
+        seen = len(stamps(images))
+        sim.feeds[CAMERA] = [message_frame(CAMERA, camera_image("PNG", large, side, side))]
+        wait_until(lambda: len(stamps(images)) >= seen + 5, 120, what="large images")
+        peak = rss_mb(node.pid)
+        sim.feeds[CAMERA] = [good]
+        seen = len(stamps(images))
+        wait_until(lambda: len(stamps(images)) >= seen + 50, 60, what="small images again")
+        time.sleep(2.0)
+        after = rss_mb(node.pid)
+        print(
+            f"node RSS {before:.0f} MB before, {peak:.0f} MB with {side}x{side} images, {after:.0f} MB after"
+        )
+        assert after - before < 30.0, "memory should return after large frames"
+    finally:
+        sim.close()

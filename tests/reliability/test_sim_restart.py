@@ -130,3 +130,29 @@ def test_a_client_owned_by_the_mission_script_is_reported_stale_and_never_replac
     assert last["reason"] == "the simulator closed the connection"
     assert "the mission script owns the client" in owner.output()
     assert owner.alive()
+
+
+def test_after_a_restart_lazy_streams_flow_at_once_whatever_the_old_simulator_had_run(
+    launcher: Rig, ros_master: RosMaster
+):
+    ports = SimPorts.free()
+    server = start_server(launcher, ports)
+    node = start_node(launcher, ports, "--scene", SCENE, node_name="lazyback")
+    imu = probe(launcher, "imu", "watch", f"{ROBOT}/IMU1/imu")  # subscribed across the restart
+    wait_until(lambda: len(stamps(imu)) > 10, 30, what="IMU before the restart")
+    time.sleep(40.0)  # the old simulator's clock runs well ahead of what the new one reaches in the test
+    server.stop(signal.SIGKILL)
+    killed = time.time()
+    start_server(launcher, ports)
+    wait_output(node, "simulator back", 20)
+    back = time.time()
+    image = probe(launcher, "image", "watch", f"{ROBOT}/Chase/scene_camera/image")  # subscribed afterwards
+    wait_until(lambda: first_after(stamps(imu), back) is not None, 10, what="IMU after the restart")
+    # a restarted server's first images take seconds on a busy machine; before, the node also dropped
+    # every image stamped before the old simulator's time, here 40 s
+    wait_until(lambda: stamps(image), 25, what="a camera image after the restart")
+    print(
+        f"after the restart: IMU {first_after(stamps(imu), killed) - killed:.2f} s, "
+        f"first image {stamps(image)[0] - back:.2f} s after the node was back"
+    )
+    assert node.alive()

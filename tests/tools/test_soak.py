@@ -17,7 +17,18 @@ import pytest
 from harness import ROOT
 
 from tools.soak.hosttune import softirq_threads
-from tools.soak.soak import WAKE_LATE_S, explain_gaps, read_probe, read_wakes, since
+from tools.soak.soak import (
+    WAKE_LATE_S,
+    Events,
+    Sample,
+    explain_gaps,
+    judge_poses,
+    own_delays,
+    read_probe,
+    read_wakes,
+    report,
+    since,
+)
 
 SOAK = [sys.executable, "-m", "tools.soak"]
 
@@ -99,9 +110,38 @@ def test_each_pose_gap_is_shown_with_the_host_delay_within_it(tmp_path, capsys):
     times = [0.0, 0.01, 0.2, 0.21]
     explain_gaps(times, [10.0, 10.01, 10.02, 10.03], wakes)
     out = capsys.readouterr().out
-    assert "/ host delay, ms" in out
+    assert "/ host delay / the bridge's own, ms" in out
     worst = out.splitlines()[1].split("/")
-    assert [round(float(cell), 1) for cell in worst] == [190.0, 10.0, 180.0, 120.0]
+    assert [round(float(cell), 1) for cell in worst] == [190.0, 10.0, 180.0, 120.0, 70.0]
+
+
+def test_the_verdict_judges_what_the_bridge_added_beyond_the_hosts_delay(tmp_path, capsys):
+    # late wake-ups cover 0.055-0.175 s (one of 120 ms) and, overlapping, 0.150-0.200 s
+    (tmp_path / "wakes.txt").write_text("0.050 0.120\n0.145 0.050\nwakes 100\n")
+    wakes = read_wakes(tmp_path / "wakes.txt")
+    assert wakes.covered_within(0.0, 1.0) == pytest.approx(0.145)  # overlaps counted once
+    assert wakes.covered_within(0.1, 0.16) == pytest.approx(0.06)
+    times = [0.0, 0.01, 0.21, 0.22, 0.45]  # a 200 ms gap the host held up, a 230 ms gap of the bridge's own
+    assert own_delays(times, wakes) == pytest.approx([0.01, 0.055, 0.01, 0.23])
+    assert own_delays(times, None) == pytest.approx([0.01, 0.2, 0.01, 0.23])
+    judged = judge_poses(times, wakes, scenes=[])
+    assert judged.largest_own_s == pytest.approx(0.23) and judged.largest_across_reload_s is None
+    judged = judge_poses(times, wakes, scenes=[0.3])  # the 230 ms gap came with a scene reload
+    assert judged.largest_own_s == pytest.approx(0.055) and judged.largest_across_reload_s == pytest.approx(
+        0.23
+    )
+    samples = [Sample(t, 100.0, 30, 60) for t in range(0, 60, 5)]
+    samples[7] = Sample(35.0, 100.0, 31, 90)  # a reload's moment: left out of the flat checks
+    events = Events(edits=[34.0], scenes=[])
+    code = report(samples, 20.0, {}, {}, judged, times, {"state": "connected"}, 60.0, None, events)
+    out = capsys.readouterr().out
+    summary = json.loads(out.split("summary: ", 1)[1].splitlines()[0])
+    assert (
+        code == 0 and summary["largest_bridge_delay_ms"] == 55.0 and summary["largest_pose_gap_ms"] == 230.0
+    )
+    assert summary["files_max"] == 60 and summary["mapping_edits"] == 1
+    code = report(samples, 20.0, {}, {}, judged, times, {"state": "connected"}, 60.0, None, Events())
+    assert code == 1 and "open files varied 60..90" in capsys.readouterr().out
 
 
 @pytest.mark.live

@@ -1,0 +1,67 @@
+"""Live mapping reloads leak no open files or threads: 200 edits, each restarting 9 topics, leave them where
+they were after the first 20; memory grows by what the frozen heap keeps of the stopped bridges."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+from harness import Rig, RosMaster, wait_until
+
+from reliability.relkit import ROBOT, SCENE, SimPorts, probe, start_node, start_server, wait_output
+
+RELOADS, WARM_UP = 200, 20
+# Each edit changes the queue size of every IMU and camera image bridge: each one stops and starts again.
+MAPPING = """version: 1
+extends: default
+rules:
+  - {{name: imu, queue_size: {size}}}
+  - {{name: camera_image, queue_size: {size}}}
+"""
+
+
+def counts(pid: int) -> tuple[int, int, float]:
+    """Open files, threads and RSS (MB) of a process."""
+    rss_kb = next(
+        int(line.split()[1])
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines()
+        if line.startswith("VmRSS:")
+    )
+    return len(os.listdir(f"/proc/{pid}/fd")), len(os.listdir(f"/proc/{pid}/task")), rss_kb / 1024.0
+
+
+def test_two_hundred_mapping_reloads_leak_no_files_threads_or_memory(
+    launcher: Rig, ros_master: RosMaster, tmp_path: Path
+):
+    mapping = tmp_path / "mapping.yaml"
+    mapping.write_text(MAPPING.format(size=1))
+    ports = SimPorts.free()
+    start_server(launcher, ports)
+    node = start_node(launcher, ports, "--scene", SCENE, "--mapping", str(mapping), node_name="reloads")
+    wait_output(node, f"({SCENE}) loaded", 60)
+    watcher = probe(launcher, "imu", "watch", f"{ROBOT}/IMU1/imu")  # a subscriber that reconnects each time
+    wait_output(watcher, "READY", 20)
+    marks = {}
+    for reload in range(1, RELOADS + 1):
+        mapping.write_text(MAPPING.format(size=1 + reload % 2))
+        wait_until(
+            lambda r=reload: node.output().count(f"mapping {mapping} reloaded") >= r,
+            20,
+            interval=0.02,
+            what=f"reload {reload}",
+        )
+        if reload in (WARM_UP, RELOADS):
+            time.sleep(1.0)  # the last restarted subscriber connections settle
+            marks[reload] = counts(node.pid)
+    (files0, threads0, rss0), (files1, threads1, rss1) = marks[WARM_UP], marks[RELOADS]
+    print(
+        f"after {WARM_UP} reloads: {files0} files, {threads0} threads, {rss0:.1f} MB; "
+        f"after {RELOADS}: {files1} files, {threads1} threads, {rss1:.1f} MB"
+    )
+    assert "restarted" in node.output() or "changed" in node.output()
+    assert files1 - files0 <= 2, "open files grew with the reloads"
+    assert threads1 - threads0 <= 2, "threads grew with the reloads"
+    # the stopped bridges' cycles stay in the frozen heap, about 38 kB an edit (docs/reliability.md)
+    assert rss1 - rss0 < 10.0, "memory grew with the reloads"
+    assert "Traceback" not in node.output()
