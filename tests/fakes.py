@@ -133,6 +133,7 @@ class FakePublisher:
 
     def unregister(self) -> None:
         self.unregistered = True
+        self.on_peers = None  # rospy's publisher forgets its listeners when it closes
 
     def subscribers(self, count: int) -> None:
         """`count` subscribers are connected now (the peer listener fires, as rospy's would)."""

@@ -64,6 +64,19 @@ class Services:
     replays: dict[str, LatchedReplays] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class ClampCounter:
+    """A bridge's `on_clamp`: a command clamped to its limits is counted, and warned like a refusal
+    (throttled)."""
+
+    stats: BridgeStats
+    warn: Callable[[str], None]
+
+    def __call__(self, what: str) -> None:
+        self.stats.clamped += 1
+        self.warn(shorten(what, SHOWN_ERROR))
+
+
 def make_context(
     spec: BridgeSpec, services: Services, on_clamp: Callable[[str], None] | None = None
 ) -> ConvertContext:
@@ -90,7 +103,9 @@ class Bridge:
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
         self.warn = RateLimitedLog(log, WARN_PERIOD_S, prefix=spec.name).warn
-        self.ctx = make_context(spec, services, self.clamped)
+        # The context is told of clamps through a counter, not a method of the bridge: a bridge that refers
+        # to itself lives on after it stops, and in a frozen heap (engine/realtime.py) for good.
+        self.ctx = make_context(spec, services, ClampCounter(self.stats, self.warn))
 
     def after_call(self, params: dict, result: Any) -> None:
         """The catalogue's after-hook, once the simulator accepted a call (a result other than false)."""
@@ -114,11 +129,6 @@ class Bridge:
     def failed(self, what: str, exc: BaseException) -> None:
         """An exception no converter should raise (a bug): a bridge error, logged with its traceback."""
         self.fail(f"{what}: {type(exc).__name__}: {exc}", exc)
-
-    def clamped(self, what: str) -> None:
-        """A command was clamped to its limits: counted, and warned like a refusal (throttled)."""
-        self.stats.clamped += 1
-        self.warn(shorten(what, SHOWN_ERROR))
 
 
 class SimToRos(Bridge):
@@ -197,9 +207,10 @@ class SimToRos(Bridge):
         self._last_publish = now
         if self._stopped:  # stopped while this message was being converted
             return None
-        if self.publisher is not None:
+        publisher = self.publisher
+        if publisher is not None:
             try:
-                self.publisher.publish(out)
+                publisher.publish(out)
             except ClosedEndpoint:  # unregistered by a concurrent stop
                 return None
         self.stats.messages += 1
@@ -241,8 +252,11 @@ class SimToRos(Bridge):
     def stop(self) -> None:
         self._set_attached(False)
         self._stopped = True
-        if self.publisher is not None:
-            self.publisher.unregister()
+        # The publisher's peer listener is a method of this bridge: dropped, the stopped bridge is freed by
+        # reference counting (a cycle would outlive it in the frozen heap, engine/realtime.py)
+        publisher, self.publisher = self.publisher, None
+        if publisher is not None:
+            publisher.unregister()
 
 
 def _accepted(result: Any) -> bool:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import gc
 import socket
+import threading
 import time
 
 import rospy
@@ -38,12 +39,19 @@ class PromptQueuedConnection(QueuedConnection):
     the queue limit never drops (a message cut short would corrupt the stream). If it takes nothing, or
     anything is already waiting, the message is queued as in rospy. A slow subscriber therefore still
     never blocks the publisher, and the queue's drop-oldest limit still applies.
+
+    rospy has the transport call a method of the connection when it closes, and the connection holds the
+    transport: a reference cycle, so every connection a stopped publisher had (its topic, its transport,
+    its writer thread's objects) lived on in the frozen heap (`freeze_heap`). Here the transport wakes the
+    writer through the connection's condition alone (`WakeOnClose`), and a closed connection is freed by
+    reference counting.
     """
 
     def __init__(self, connection, queue_size: int) -> None:
         self._partial: memoryview | None = None  # the unsent rest of a message the socket took in part
         self._busy = False  # the writer thread holds messages it took from the queue
         super().__init__(connection, queue_size)
+        connection.set_cleanup_callback(WakeOnClose(self._cond_data_available))
 
     def write_data(self, data: bytes) -> bool:
         with self._lock:
@@ -95,6 +103,18 @@ class PromptQueuedConnection(QueuedConnection):
             finally:
                 with self._lock:
                     self._busy = False
+
+
+class WakeOnClose:
+    """A transport's cleanup callback that wakes its connection's writer thread (rospy's
+    `_closed_connection_callback`) without referring to the connection."""
+
+    def __init__(self, data_available: threading.Condition) -> None:
+        self._data_available = data_available
+
+    def __call__(self, _transport: object) -> None:
+        with self._data_available:
+            self._data_available.notify()
 
 
 def tune_process() -> None:

@@ -164,13 +164,17 @@ class ConnectionPoll(rospy.topics.Poller):
     which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
     1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
     `realtime.tune_process` installs it for every topic made afterwards, with the frozen heap.
+
+    rospy's own choice when a platform has no epoll, with the methods chosen on the class: rospy keeps them
+    as bound methods on the instance, a cycle that outlives the topic in a frozen heap.
     """
 
-    def __init__(self) -> None:  # rospy's own choice when a platform has no epoll
+    add_fd = rospy.topics.Poller.add_poll
+    remove_fd = rospy.topics.Poller.remove_poll
+    error_iter = rospy.topics.Poller.error_poll_iter
+
+    def __init__(self) -> None:
         self.poller = select.poll()
-        self.add_fd = self.add_poll
-        self.remove_fd = self.remove_poll
-        self.error_iter = self.error_poll_iter
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:

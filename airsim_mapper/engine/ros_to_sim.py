@@ -124,8 +124,11 @@ class RosToSim(Bridge):
         self.services.sim.call_async(f"{robot_path}/{method}", {})
 
     def stop(self) -> None:
-        if self.subscriber is not None:
-            self.subscriber.unregister()
+        # The subscriber's callback is a method of this bridge: dropped, the stopped bridge is freed by
+        # reference counting (a cycle would outlive it in the frozen heap, engine/realtime.py)
+        subscriber, self.subscriber = self.subscriber, None
+        if subscriber is not None:
+            subscriber.unregister()
         if self.moving:
             self.moving = False
             try:
@@ -186,8 +189,10 @@ class RosService(Bridge):
         return _fill(response, not failed and bool(robots), message)
 
     def stop(self) -> None:
-        if self.service is not None:
-            self.service.shutdown()
+        # rospy's service keeps its handler, a method of this bridge, after shutdown: dropped, as above
+        service, self.service = self.service, None
+        if service is not None:
+            service.shutdown()
 
 
 def _payload(ros_msg: Any) -> Any:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.mapping import template
@@ -53,33 +54,44 @@ def resolve_variables(
             problems.append(_problem(marks, file, ("variables", name), message))
         if unknown:
             del good[name]
-    resolved: dict[str, str] = {}
-    looped: set[str] = set()
+    resolution = _Resolution(good, marks, file, problems)
+    for name in good:
+        resolution.expand(name, ())
+    return resolution.resolved, problems
 
-    def expand(name: str, stack: tuple[str, ...]) -> str | None:
-        if name in resolved:
-            return resolved[name]
+
+@dataclass
+class _Resolution:
+    """The mapping variables resolved so far. (A class rather than a recursive closure: a closure that
+    calls itself is a reference cycle, which kept each reload's marks in the node's frozen heap.)"""
+
+    good: dict[str, str]
+    marks: Marks
+    file: str
+    problems: list[Problem]
+    resolved: dict[str, str] = field(default_factory=dict)
+    looped: set[str] = field(default_factory=set)
+
+    def expand(self, name: str, stack: tuple[str, ...]) -> str | None:
+        if name in self.resolved:
+            return self.resolved[name]
         if name in stack:
             members = stack[stack.index(name) :]
-            if not looped.intersection(members):  # one report per loop
-                looped.update(members)
+            if not self.looped.intersection(members):  # one report per loop
+                self.looped.update(members)
                 loop = " -> ".join((*members, name))
                 message = f"variables: {name} refers to itself ({loop})"
-                problems.append(_problem(marks, file, ("variables", name), message))
+                self.problems.append(_problem(self.marks, self.file, ("variables", name), message))
             return None
-        text = good[name]
+        text = self.good[name]
         for used in template.variables(text):
-            if used in good:
-                inner = expand(used, (*stack, name))
+            if used in self.good:
+                inner = self.expand(used, (*stack, name))
                 if inner is None:
                     return None
                 text = text.replace(f"<{used}>", inner)
-        resolved[name] = text
+        self.resolved[name] = text
         return text
-
-    for name in good:
-        expand(name, ())
-    return resolved, problems
 
 
 def substitute(text: str, resolved: Mapping[str, str]) -> str:
