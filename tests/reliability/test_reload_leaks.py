@@ -1,5 +1,6 @@
-"""Live mapping reloads leak no open files or threads: 200 edits, each restarting 9 topics, leave them where
-they were after the first 20; memory grows by what the frozen heap keeps of the stopped bridges."""
+"""Live mapping reloads leak nothing: 200 edits, each restarting 9 topics, leave open files, threads and
+memory where they were after the first 20. The node's heap is frozen, so a stopped bridge must be freed by
+reference counting (tests/engine/test_freed_on_stop.py); its cycles used to stay, about 38 kB an edit."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from harness import Rig, RosMaster, wait_until
 from reliability.relkit import ROBOT, SCENE, SimPorts, probe, start_node, start_server, wait_output
 
 RELOADS, WARM_UP = 200, 20
+MEMORY_BOUND_MB = 1.5  # over the 180 edits after the warm-up
 # Each edit changes the queue size of every IMU and camera image bridge: each one stops and starts again.
 MAPPING = """version: 1
 extends: default
@@ -62,6 +64,7 @@ def test_two_hundred_mapping_reloads_leak_no_files_threads_or_memory(
     assert "restarted" in node.output() or "changed" in node.output()
     assert files1 - files0 <= 2, "open files grew with the reloads"
     assert threads1 - threads0 <= 2, "threads grew with the reloads"
-    # the stopped bridges' cycles stay in the frozen heap, about 38 kB an edit (docs/reliability.md)
-    assert rss1 - rss0 < 10.0, "memory grew with the reloads"
+    # 6.5-7 MB when the stopped bridges stayed in the frozen heap; allocator noise is far below the bound
+    # (docs/reliability.md, "A reload's memory")
+    assert rss1 - rss0 < MEMORY_BOUND_MB, "memory grew with the reloads"
     assert "Traceback" not in node.output()
