@@ -14,7 +14,6 @@ image over `max_pixels` (the rule's `params.max_pixels`) is refused as oversized
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Mapping
 from typing import Any
 
@@ -23,7 +22,7 @@ from sensor_msgs.msg import CompressedImage
 from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
-from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size
+from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size, serialize_buffer_last
 from airsim_mapper.convert.stamps import header
 
 FORMAT = "bgr8; png compressed bgr8"  # compressed_image_transport's "<encoding>; png compressed <target>"
@@ -38,14 +37,7 @@ class BufferCompressedImage(CompressedImage):
     _slot_types = CompressedImage._slot_types
 
     def serialize(self, buff: Any) -> None:
-        data, self.data = self.data, b""
-        try:
-            CompressedImage.serialize(self, buff)  # the data as an empty uint8[]: a zero length, last
-        finally:
-            self.data = data
-        buff.seek(buff.tell() - 4)
-        buff.write(struct.pack("<I", memoryview(data).nbytes))
-        buff.write(data)
+        serialize_buffer_last(self, CompressedImage, buff)
 
 
 @sim_fields.converter("compressed_image")

@@ -68,14 +68,21 @@ class BufferImage(Image):
     _slot_types = Image._slot_types
 
     def serialize(self, buff: Any) -> None:
-        data, self.data = self.data, b""
-        try:
-            Image.serialize(self, buff)  # the pixels as an empty uint8[]: a zero length, last
-        finally:
-            self.data = data
-        buff.seek(buff.tell() - 4)
-        buff.write(struct.pack("<I", memoryview(data).nbytes))
-        buff.write(data)
+        serialize_buffer_last(self, Image, buff)
+
+
+def serialize_buffer_last(message: Any, base: type, buff: Any) -> None:
+    """Serialize `message`, a `base` genpy message whose last field ``data`` is a uint8[] held as any byte
+    buffer: every other field through genpy (``data`` as an empty array: a zero length, last), then the
+    buffer's length and the buffer itself."""
+    data, message.data = message.data, b""
+    try:
+        base.serialize(message, buff)
+    finally:
+        message.data = data
+    buff.seek(buff.tell() - 4)
+    buff.write(struct.pack("<I", memoryview(data).nbytes))
+    buff.write(data)
 
 
 def as_bytes_view(array: np.ndarray) -> memoryview:

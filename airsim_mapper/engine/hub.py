@@ -22,7 +22,7 @@ class StreamHub:
         self,
         sim: SimLink,
         on_transforms: Callable[[list], None],
-        on_stamp: Callable[[int, float], object] | None = None,
+        on_stamp: Callable[[int, float, str], object] | None = None,
     ) -> None:
         self._sim = sim
         self._on_transforms = on_transforms

@@ -8,38 +8,47 @@ it and shows the latest on /diagnostics for a while, and whatever depended on th
 (`on_jump`: the engine clears its tf buffer and the streams' stale filters). The stamps watched are those
 of every frame the node receives (the hub's streams), so the pose streams that feed tf see a jump whether
 or not anything subscribes to /clock.
+
+Each stream is compared with itself: one topic's stamps only go forward within a session, while different
+topics lag each other by any amount (a camera image, rendered and sent after the poses of its tick, is
+hundreds of milliseconds behind them on a busy host; one watch over all stamps took that lag for a
+restart). After a jump the other streams jump too, and old frames still in flight may come after new
+ones, so for SETTLE_S every stream starts over quietly: a session restarts once.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 NS_PER_S = 1_000_000_000
 RECENT_S = 30.0  # how long /diagnostics keeps warning about the latest jump
-TOLERANCE_NS = 100_000_000  # a stamp this much older than the newest is a jump (streams interleave)
+SETTLE_S = 1.0  # after a jump, other streams' steps back are the same restart
 
 
 @dataclass
 class SimTimeWatch:
-    """Follows the simulator's stamps and notices each step back in time."""
+    """Follows each stream's simulator stamps and notices each step back in time.
+
+    `observe` runs on the link's one receive thread, so the per-stream stamps need no lock."""
 
     warn: Callable[[str], None] | None = None
     on_jump: Callable[[float], None] | None = None  # told the size of each jump back, in seconds
-    last_ns: int | None = None
     jumps_back: int = 0
     last_jump_s: float = 0.0  # size of the latest jump back, in seconds
     last_jump_at: float | None = None  # time.monotonic() when it was seen
+    _last: dict[str, int] = field(default_factory=dict, init=False, repr=False)  # each stream's newest stamp
 
-    def observe(self, stamp_ns: int, now: float) -> float | None:
-        """Note one stamp; the size of the jump back in seconds if time went backwards (more than
-        TOLERANCE_NS behind the newest stamp seen: frames of different topics may interleave)."""
-        last = self.last_ns
-        if last is None or stamp_ns >= last - TOLERANCE_NS:
-            if last is None or stamp_ns > last:
-                self.last_ns = stamp_ns
+    def observe(self, stamp_ns: int, now: float, topic: str = "") -> float | None:
+        """Note one stamp of `topic`; the size of the jump back in seconds if that stream's time went
+        backwards (a new simulator session), else None."""
+        last = self._last.get(topic)
+        self._last[topic] = stamp_ns
+        if last is None or stamp_ns >= last:
             return None
-        self.last_ns = stamp_ns
+        if self.last_jump_at is not None and now - self.last_jump_at < SETTLE_S:
+            return None  # this stream follows the restart already seen on another
+        self._last = {topic: stamp_ns}
         jump = (last - stamp_ns) / NS_PER_S
         self.jumps_back += 1
         self.last_jump_s, self.last_jump_at = jump, now

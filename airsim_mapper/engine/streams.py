@@ -56,7 +56,7 @@ class Stream:
     handlers: list[Handler] = field(default_factory=list)
     stats: StreamStats = field(default_factory=StreamStats)
     # Told every stamp but a stream's first (the simulator's cached frame, possibly old): the time watch.
-    on_stamp: Callable[[int, float], Any] | None = None
+    on_stamp: Callable[[int, float, str], Any] | None = None
 
     def __post_init__(self) -> None:
         self._cond = threading.Condition()
@@ -84,7 +84,7 @@ class Stream:
             self._has_pending = True
             self._cond.notify()
         if type(stamp) is int and self.on_stamp is not None and stats.received > 1:
-            self.on_stamp(stamp, now)
+            self.on_stamp(stamp, now, self.topic)
 
     def _work(self) -> None:
         while True:

@@ -89,7 +89,7 @@ def test_an_attach_waits_for_an_unsubscribe_in_flight_so_the_server_sees_them_in
 
 def test_every_streams_stamps_reach_the_time_watch_and_a_new_session_forgets_the_newest() -> None:
     sim, seen = RecordingLink(), []
-    hub = StreamHub(sim, lambda _tf: None, on_stamp=lambda stamp, _now: seen.append(stamp))
+    hub = StreamHub(sim, lambda _tf: None, on_stamp=lambda stamp, _now, _topic: seen.append(stamp))
     bridges = [Bridge(), Bridge()]
     hub.attach("/a", bridges[0].handle)
     hub.attach("/b", bridges[1].handle)

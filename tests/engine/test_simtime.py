@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from airsim_mapper.engine.simtime import RECENT_S, TOLERANCE_NS, SimTimeWatch
+from airsim_mapper.engine.simtime import RECENT_S, SETTLE_S, SimTimeWatch
 from airsim_mapper.engine.streams import Stream
 
 S = 1_000_000_000
@@ -35,19 +35,34 @@ def test_the_latest_jump_is_reported_while_it_is_recent():
     assert watch.recent(100.0 + RECENT_S + 1) == ""
 
 
-def test_frames_of_interleaved_topics_a_little_out_of_order_are_no_jump_and_each_jump_is_told():
+def test_a_stream_behind_another_is_no_jump_and_each_jump_is_told():
     told: list[float] = []
     watch = SimTimeWatch(on_jump=told.append)
-    watch.observe(10 * S, 0.0)
-    assert watch.observe(10 * S - TOLERANCE_NS, 0.0) is None  # another topic's frame, a step behind
-    assert watch.last_ns == 10 * S  # the newest stays the reference
-    assert watch.observe(1 * S, 1.0) == 9.0
-    assert told == [9.0] and watch.last_ns == 1 * S
+    for t in range(1, 50):  # poses run ahead; a camera's images come 0.6 s behind them, as on a busy host
+        assert watch.observe(t * S // 10 + 600_000_000, t, "/pose") is None
+        assert watch.observe(t * S // 10, t, "/image") is None
+    assert watch.jumps_back == 0 and told == []
+    assert watch.observe(6 * S, 100.0, "/image") is None  # forward in its own stream
+    assert watch.observe(0, 101.0, "/pose") == 5.5  # the simulator restarted
+    assert told == [5.5]
+
+
+def test_one_restart_is_one_jump_whichever_streams_follow_it_and_in_what_order():
+    watch = SimTimeWatch()
+    for topic in ("/pose", "/image", "/lidar"):
+        watch.observe(60 * S, 10.0, topic)
+    assert watch.observe(1 * S, 20.0, "/pose") == 59.0
+    assert watch.observe(59 * S, 20.1, "/lidar") is None  # the old session's frame still in flight
+    assert watch.observe(1 * S, 20.2, "/lidar") is None  # then its new session
+    assert watch.observe(2 * S, 20.3, "/image") is None  # a stream's first stamp after the restart
+    assert watch.jumps_back == 1
+    assert watch.observe(0, 20.0 + SETTLE_S + 1, "/lidar") == 1.0  # a later restart is a jump again
+    assert watch.jumps_back == 2
 
 
 def test_a_stream_tells_every_stamp_but_its_first_which_may_be_the_simulators_cached_frame():
     seen: list[int] = []
-    stream = Stream("/t", on_stamp=lambda stamp, _now: seen.append(stamp))
+    stream = Stream("/t", on_stamp=lambda stamp, _now, _topic: seen.append(stamp))
     try:
         for stamp in (5, 1, 2, "x"):
             stream.offer(None, {"time_stamp": stamp})
