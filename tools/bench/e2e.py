@@ -131,63 +131,37 @@ class Bench:
         profile: str | None = None,
         node_args: Sequence[str] = (),
     ) -> Iterator[Session]:
-        server, topics_port, services_port = self._replay_server("WARNING")
-        node: Child | None = None
-        try:
-            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
-            node = self.module(
-                "bridge",
-                "tools.bench.node",
-                "--as",
-                runner,
-                "--decode",
-                decode,
-                "--topicsport",
-                str(topics_port),
-                "--servicesport",
-                str(services_port),
-                "--simconfigpath",
-                str(self.config_dir),
-                "--scene",
-                scene_file,
-                "--nodename",
-                "bench_bridge",
-                *(["--profile", profile] if profile else []),
-                *node_args,
-            )
-            yield Session(self, server, node)
-        finally:
-            if node is not None:
-                self.procs.stop(node)
-            self.procs.stop(server)
-            time.sleep(0.5)  # let the master drop the node's registrations
+        args = ["--as", runner, "--decode", decode, "--nodename", "bench_bridge"]
+        args += [*(["--profile", profile] if profile else []), *node_args]
+        with self._replay_client("bridge", "tools.bench.node", scene_file, "bridge", args) as session:
+            yield session
 
     @contextlib.contextmanager
     def forwarder_session(self, scene_file: str, camera: bool = False) -> Iterator[Session]:
         """The bare forwarder (forwarder.py) on a replay server: the floor of the bridge's figures."""
+        args = ["--camera"] if camera else []
+        client = self._replay_client("forwarder", "tools.bench.forwarder", scene_file, "forwarder", args)
+        with client as session:
+            yield session
+
+    @contextlib.contextmanager
+    def _replay_client(
+        self, name: str, module: str, scene_file: str, role: str, args: Sequence[str]
+    ) -> Iterator[Session]:
+        """`module` run as `name` against a fresh replay server on `scene_file`, both stopped afterwards."""
         server, topics_port, services_port = self._replay_server("WARNING")
-        forwarder: Child | None = None
+        client: Child | None = None
         try:
             wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
-            forwarder = self.module(
-                "forwarder",
-                "tools.bench.forwarder",
-                "--topicsport",
-                str(topics_port),
-                "--servicesport",
-                str(services_port),
-                "--simconfigpath",
-                str(self.config_dir),
-                "--scene",
-                scene_file,
-                *(["--camera"] if camera else []),
-            )
-            yield Session(self, server, forwarder, role="forwarder")
+            ports = ["--topicsport", str(topics_port), "--servicesport", str(services_port)]
+            scene = ["--simconfigpath", str(self.config_dir), "--scene", scene_file]
+            client = self.module(name, module, *ports, *scene, *args)
+            yield Session(self, server, client, role=role)
         finally:
-            if forwarder is not None:
-                self.procs.stop(forwarder)
+            if client is not None:
+                self.procs.stop(client)
             self.procs.stop(server)
-            time.sleep(0.5)
+            time.sleep(0.5)  # let the master drop the client's registrations
 
     # -- baselines
 
