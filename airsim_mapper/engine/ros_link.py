@@ -6,7 +6,7 @@ from __future__ import annotations
 import importlib
 import select
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import rospy
@@ -165,16 +165,28 @@ class ConnectionPoll(rospy.topics.Poller):
     1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
     `realtime.tune_process` installs it for every topic made afterwards, with the frozen heap.
 
-    rospy's own choice when a platform has no epoll, with the methods chosen on the class: rospy keeps them
-    as bound methods on the instance, a cycle that outlives the topic in a frozen heap.
+    It watches what rospy's epoll watches: an error, a hang-up, and the peer's half-close (POLLRDHUP, the
+    FIN of a closed peer). rospy's own poll(2) fallback misses the half-close, so a connection whose peer
+    had just gone stayed listed; a new publisher at the same node URI then found it, took itself for
+    connected (`has_connection`) and was never connected. The methods sit on the class: rospy keeps
+    bound methods on the instance, a cycle that outlives the topic in a frozen heap.
     """
 
-    add_fd = rospy.topics.Poller.add_poll
-    remove_fd = rospy.topics.Poller.remove_poll
-    error_iter = rospy.topics.Poller.error_poll_iter
+    _WATCH = select.POLLRDHUP  # POLLHUP and POLLERR are reported whatever the mask
+    _GONE = select.POLLHUP | select.POLLERR | select.POLLRDHUP
 
     def __init__(self) -> None:
         self.poller = select.poll()
+
+    def add_fd(self, fd: int) -> None:
+        self.poller.register(fd, self._WATCH)
+
+    def remove_fd(self, fd: int) -> None:
+        self.poller.unregister(fd)
+
+    def error_iter(self) -> Iterator[int]:
+        """The watched descriptors whose connection has ended."""
+        return (fd for fd, event in self.poller.poll(0) if event & self._GONE)
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:
