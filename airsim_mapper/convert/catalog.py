@@ -67,6 +67,7 @@ class ConverterInfo:
     action: str | None = None  # one of ACTIONS (runner ACTION)
     example: Example | None = None  # what the property tests start from (every entry has one)
     max_pixels: bool = False  # takes the rule's params.max_pixels and params.max_bytes (images)
+    inline: bool = False  # light: a few fields in, one small message out; run on the receive thread
 
     @property
     def sim_kind(self) -> str:
@@ -104,6 +105,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "pose_stamped",
             "sim PoseStamped (robot actual_pose) -> PoseStamped; with tf, also the robot's transform",
+            inline=True,
             example=_e({**STAMP, **POSE}),
         ),
         _c(
@@ -114,6 +116,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "camera_pose",
             "robot actual_pose composed with the camera mount (and any camera pose command) -> camera pose",
+            inline=True,
             example=_e({**STAMP, **POSE}),
         ),
         _c(
@@ -124,6 +127,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "sensor_pose",
             "robot actual_pose composed with a sensor's config origin (lidar, radar, distance) -> its pose",
+            inline=True,
             example=_e({**STAMP, **POSE}),
         ),
         _c(
@@ -134,6 +138,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "pose",
             "camera_optical_pose",
             "as camera_pose, turned into the optical frame (z forward, x right, y down) for image frames",
+            inline=True,
             example=_e({**STAMP, **POSE}),
         ),
         _c(
@@ -144,6 +149,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "odometry",
             "odometry",
             "robot actual_pose -> Odometry; body-frame twist from successive poses (state in ctx.state)",
+            inline=True,
             example=_e({**STAMP, **POSE}),
         ),
         _c(
@@ -154,6 +160,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "collision",
             "collision",
             "sim CollisionInfo -> PointStamped of the impact point (world frame)",
+            inline=True,
             example=_e({**STAMP, "object_name": "x", "impact_point": {"x": 1.0, "y": 2.0, "z": 3.0}}),
         ),
         _c(
@@ -253,6 +260,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "clock",
             "clock",
             "any stamped sim message -> Clock at its sim time",
+            inline=True,
             example=_e(STAMP),
         ),
         _c(
@@ -263,6 +271,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "imu",
             "sim IMU -> Imu",
+            inline=True,
             example=_e(
                 {
                     **STAMP,
@@ -280,6 +289,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "gps",
             "sim GPS -> NavSatFix",
+            inline=True,
             example=_e(
                 {
                     **STAMP,
@@ -300,6 +310,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "barometer",
             "sim Barometer -> FluidPressure (Pa)",
+            inline=True,
             example=_e({**STAMP, "pressure": 101325.0}),
         ),
         _c(
@@ -310,6 +321,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "magnetometer",
             "sim Magnetometer (gauss) -> MagneticField (tesla)",
+            inline=True,
             example=_e(
                 {
                     **STAMP,
@@ -326,6 +338,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "distance",
             "sim DistanceSensor -> Range",
+            inline=True,
             example=_e({**STAMP, "current_distance": 3.0}),
         ),
         _c(
@@ -336,6 +349,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "battery",
             "sim Battery -> BatteryState",
+            inline=True,
             example=_e(
                 {**STAMP, "battery_pct_remaining": 50.0, "battery_charge_state": "BATTERY_CHARGE_STATE_OK"}
             ),
@@ -348,6 +362,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "instruments",
             "airspeed",
             "sim Airspeed (differential pressure) -> FluidPressure (Pa)",
+            inline=True,
             example=_e({**STAMP, "diff_pressure": 3.0}),
         ),
         _c(
@@ -466,7 +481,14 @@ def find(name: str) -> ConverterInfo | None:
 
 
 DIRECTION_LABELS = {SIM_TO_ROS: "sim → ROS", ROS_TO_SIM: "ROS → sim"}
-TABLE_HEADERS = ("converter", "direction", "ROS types", "what it does")
+TABLE_HEADERS = ("converter", "direction", "ROS types", "runs on", "what it does")
+
+
+def runs_on(info: ConverterInfo) -> str:
+    """The thread a converter runs on (engine/streams.py): light ones on the receive thread."""
+    if info.direction == ROS_TO_SIM:
+        return "rospy's callback"
+    return "receive thread" if info.inline else "its topic's worker"
 
 
 def markdown_table(converters: Iterable[ConverterInfo] | None = None) -> str:
@@ -476,6 +498,7 @@ def markdown_table(converters: Iterable[ConverterInfo] | None = None) -> str:
             f"`{info.name}`",
             DIRECTION_LABELS[info.direction],
             ", ".join(f"`{t}`" for t in info.ros_types),
+            runs_on(info),
             info.summary.replace("|", "\\|"),
         )
         for info in (CONVERTERS.values() if converters is None else converters)

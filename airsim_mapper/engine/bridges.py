@@ -181,7 +181,7 @@ class SimToRos(Bridge):
             if attached:
                 if self.lazy and self.spec.options.first_message == "fresh":
                     self._fresh_after = self.services.hub.sim_now()
-                self.services.hub.attach(self.topic, self.handle)
+                self.services.hub.attach(self.topic, self.handle, inline=self.info.inline)
             else:
                 self.services.hub.detach(self.topic, self.handle)
 

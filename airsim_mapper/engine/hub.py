@@ -36,14 +36,16 @@ class StreamHub:
         with self._lock:
             return self._topic_locks.setdefault(topic, threading.Lock())
 
-    def attach(self, topic: str, handler: Handler) -> None:
+    def attach(self, topic: str, handler: Handler, inline: bool = False) -> None:
+        """Feed `topic`'s messages to `handler`; `inline` if it is light enough for the receive thread
+        (streams.py)."""
         with self._in_order(topic):
             with self._lock:
                 stream = self._streams.get(topic)
                 if stream is not None:
-                    stream.handlers = [*stream.handlers, handler]
+                    stream.add_handler(handler, inline)
                     return
-                stream = Stream(topic, self._on_transforms, [handler], on_stamp=self._on_stamp)
+                stream = Stream(topic, self._on_transforms, [handler], on_stamp=self._on_stamp, inline=inline)
                 self._streams[topic] = stream
                 sim = self._sim
             sim.subscribe(topic, stream.offer)
@@ -54,9 +56,7 @@ class StreamHub:
                 stream = self._streams.get(topic)
                 if stream is None:
                     return
-                # bound methods are made afresh on each access: equal, not identical
-                stream.handlers = [h for h in stream.handlers if h != handler]
-                if stream.handlers:
+                if stream.remove_handler(handler):
                     return
                 del self._streams[topic]
                 sim = self._sim

@@ -75,14 +75,22 @@ def receive_frame(sock: Any) -> memoryview:
     Python bytes object). Here the view keeps the message alive and frees it when the last view of it (the
     pixels of an image being published, say) is gone. NNG's blocking receive runs without the GIL.
     """
-    from pynng import ffi, lib
-    from pynng.exceptions import check_err
-
+    ffi, lib, check_err = _nng()
     holder = ffi.new("nng_msg **")
     check_err(lib.nng_recvmsg(sock.socket, holder, 0))
     msg = holder[0]
     body = ffi.gc(lib.nng_msg_body(msg), lambda _body: lib.nng_msg_free(msg))
     return memoryview(ffi.buffer(body, lib.nng_msg_len(msg)))
+
+
+@functools.cache
+def _nng() -> tuple[Any, Any, Any]:
+    """pynng's cffi handles, imported once: a `from pynng import ...` per frame cost more than the rest of
+    `receive_frame` (pynng is a package, so each such import runs importlib's Python code)."""
+    from pynng import ffi, lib
+    from pynng.exceptions import check_err
+
+    return ffi, lib, check_err
 
 
 def take_over(client: Any) -> bool:

@@ -70,25 +70,28 @@ def register_all(master_uri: str, caller_id: str, node_uri: str) -> Registered:
 
 def master_pid(master_uri: str, caller_id: str) -> int | None:
     """The master's pid, or None when it does not answer."""
-    import rosgraph
-
     try:
-        return rosgraph.Master(caller_id, master_uri=master_uri).getPid()
+        code, _message, pid = xmlrpc.client.ServerProxy(master_uri).getPid(caller_id)
     except Exception:
         return None
+    return pid if code == 1 else None
 
 
-def knows_node(master_uri: str, caller_id: str, node_uri: str) -> bool | None:
-    """Whether the master has `caller_id` registered at `node_uri`; None when it does not answer.
+def ask_master(master_uri: str, caller_id: str, node_uri: str) -> tuple[bool, int | None] | None:
+    """Whether the master has `caller_id` registered at `node_uri`, and its pid; None when it does not
+    answer. One request (`system.multicall`, which rosmaster serves): the watch asks every second.
 
     A node with any publication, subscription or service (every rospy node publishes /rosout) is known
     to the master it registered with; a restarted master answers "unknown node".
     """
     try:
-        code, _message, uri = xmlrpc.client.ServerProxy(master_uri).lookupNode(caller_id, caller_id)
+        calls = xmlrpc.client.MultiCall(xmlrpc.client.ServerProxy(master_uri))
+        calls.lookupNode(caller_id, caller_id)
+        calls.getPid(caller_id)
+        (code, _message, uri), (pid_code, _pid_message, pid) = tuple(calls())
     except Exception:
         return None
-    return code == 1 and uri == node_uri
+    return code == 1 and uri == node_uri, pid if pid_code == 1 else None
 
 
 def needs_registration(known: bool | None, pid: int | None, last_pid: int | None) -> bool:
@@ -122,10 +125,10 @@ class MasterWatch:
 
     def _new_master(self) -> int | None:
         """The pid of a master that needs our registrations, or None (no answer, or it has them)."""
-        known = knows_node(self.master_uri, self.caller_id, self.node_uri)
-        if known is None:
+        answer = ask_master(self.master_uri, self.caller_id, self.node_uri)
+        if answer is None:
             return None
-        pid = master_pid(self.master_uri, self.caller_id)
+        known, pid = answer
         return pid if needs_registration(known, pid, self._pid) else None
 
     def _run(self) -> None:

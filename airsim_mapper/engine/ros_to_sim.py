@@ -109,13 +109,21 @@ class RosToSim(Bridge):
         self.stats.messages += 1
         self.after_call(params, result)
 
-    def check_watchdog(self, now: float) -> None:
-        """Stop the robot when commands stopped arriving for `watchdog_s` seconds."""
+    def check_watchdog(self, now: float) -> float | None:
+        """Stop the robot when commands stopped arriving for `watchdog_s` seconds. The seconds until this
+        watchdog can next be due (a command arriving now is due `watchdog_s` from now), or None without
+        a watchdog."""
         timeout = self.spec.options.watchdog_s
-        if timeout is None or not self.moving or now - self.last_message < timeout:
-            return
+        if timeout is None:
+            return None
+        if not self.moving:
+            return timeout
+        quiet = now - self.last_message
+        if quiet < timeout:
+            return timeout - quiet
         self.moving = False
         self.stop_robot(f"no command for {timeout:.1f} s")
+        return timeout
 
     def stop_robot(self, why: str) -> None:
         method = self.spec.params.get("stop_method", "Hover")

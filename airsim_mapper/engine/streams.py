@@ -1,9 +1,14 @@
-"""Per-topic workers: the client's receive thread only hands a message over, a worker converts it.
+"""Per-topic streams: light messages are handled where they arrive, heavy ones by a worker of their own.
 
-Each subscribed simulator topic gets one `Stream`: a slot holding the newest message and a thread that
-takes it and runs the handlers of every bridge fed by that topic. A message that arrives while the previous
-one is still waiting replaces it (drop-oldest, depth 1) and is counted, so a slow image conversion never
-delays pose, tf or commands, and never builds a backlog.
+Each subscribed simulator topic gets one `Stream`, which runs the handlers of every bridge fed by that
+topic. A stream whose handlers are all light (a pose, an instrument reading: a few fields in, one small
+message out; the catalogue's `ConverterInfo.inline`) runs them on the receive thread as each message
+arrives: no thread wake, no handoff of the GIL, as a bare client callback would. Any other stream has a
+slot holding the newest message and a thread that takes it; a message that arrives while the previous one
+is still waiting replaces it (drop-oldest, depth 1) and is counted, so a slow image conversion never
+delays pose, tf or commands, and never builds a backlog. A stream goes from inline to a worker when a
+heavy handler joins it, and stays there (a message handled inline after one left in the slot would
+overtake it).
 """
 
 from __future__ import annotations
@@ -49,7 +54,8 @@ class StreamStats:
 
 @dataclass
 class Stream:
-    """The latest-message slot and worker thread of one simulator topic."""
+    """The handlers of one simulator topic: inline on the receive thread, or a latest-message slot and a
+    worker thread."""
 
     topic: str
     on_transforms: Callable[[list], None] | None = None
@@ -57,17 +63,39 @@ class Stream:
     stats: StreamStats = field(default_factory=StreamStats)
     # Told every stamp but a stream's first (the simulator's cached frame, possibly old): the time watch.
     on_stamp: Callable[[int, float, str], Any] | None = None
+    inline: bool = False  # every handler is light: run them on the offering thread
 
     def __post_init__(self) -> None:
         self._cond = threading.Condition()
         self._pending: Any = None
         self._has_pending = False
         self._running = True
+        self._thread: threading.Thread | None = None
+        if not self.inline:
+            self._start_worker()
+
+    def _start_worker(self) -> None:
         self._thread = threading.Thread(target=self._work, name=f"stream:{self.topic}", daemon=True)
         self._thread.start()
 
+    def add_handler(self, handler: Handler, inline: bool) -> None:
+        """One more handler; a heavy one moves an inline stream to a worker for good."""
+        with self._cond:
+            self.handlers = [*self.handlers, handler]
+            if self.inline and not inline:
+                self.inline = False
+                self._start_worker()
+
+    def remove_handler(self, handler: Handler) -> bool:
+        """Take a handler off (bound methods are made afresh on each access: equal, not identical); True
+        while others remain."""
+        with self._cond:
+            self.handlers = [h for h in self.handlers if h != handler]
+            return bool(self.handlers)
+
     def offer(self, _topic_info: Any, message: Any) -> None:
-        """Client receive-thread callback: store the message and wake the worker. Never blocks or raises."""
+        """Receive-thread callback: handle the message (inline) or store it and wake the worker. Never
+        raises; blocks only for light handlers' work."""
         now = time.monotonic()
         with self._cond:
             stats = self.stats
@@ -78,13 +106,19 @@ class Stream:
             stamp = message.get("time_stamp") if type(message) is dict else None
             if type(stamp) is int and stamp > stats.newest_stamp:
                 stats.newest_stamp = stamp
-            if self._has_pending:
-                stats.dropped += 1
-            self._pending = message
-            self._has_pending = True
-            self._cond.notify()
+            inline = self.inline and self._running
+            if inline:
+                handlers = self.handlers
+            else:
+                if self._has_pending:
+                    stats.dropped += 1
+                self._pending = message
+                self._has_pending = True
+                self._cond.notify()
         if type(stamp) is int and self.on_stamp is not None and stats.received > 1:
             self.on_stamp(stamp, now, self.topic)
+        if inline:
+            self._handle(handlers, message, now)
 
     def _work(self) -> None:
         while True:
@@ -94,30 +128,35 @@ class Stream:
                 if not self._running:
                     return
                 message, self._pending, self._has_pending = self._pending, None, False
-                handlers = list(self.handlers)
+                handlers = self.handlers
                 arrived = self.stats.last_receive
-            start = time.monotonic()
-            transforms: list = []
-            for handler in handlers:
-                try:
-                    transforms.extend(handler(message) or ())
-                except Exception:  # a handler bug must not kill the stream
-                    self.stats.errors += 1
-                    log.exception("handler for %s failed", self.topic)
-            if transforms and self.on_transforms is not None:
-                try:
-                    self.on_transforms(transforms)
-                except Exception:
-                    self.stats.errors += 1
-                    log.exception("tf for %s failed", self.topic)
-            stats = self.stats
-            stats.handled += 1
-            stats.wait_max = max(stats.wait_max, start - arrived)
-            stats.handle_max = max(stats.handle_max, time.monotonic() - start)
+            self._handle(handlers, message, arrived)
+
+    def _handle(self, handlers: list[Handler], message: Any, arrived: float) -> None:
+        """Run every handler on one message, then send their transforms as one tf message."""
+        start = time.monotonic()
+        transforms: list = []
+        for handler in handlers:
+            try:
+                transforms.extend(handler(message) or ())
+            except Exception:  # a handler bug must not kill the stream
+                self.stats.errors += 1
+                log.exception("handler for %s failed", self.topic)
+        if transforms and self.on_transforms is not None:
+            try:
+                self.on_transforms(transforms)
+            except Exception:
+                self.stats.errors += 1
+                log.exception("tf for %s failed", self.topic)
+        stats = self.stats
+        stats.handled += 1
+        stats.wait_max = max(stats.wait_max, start - arrived)
+        stats.handle_max = max(stats.handle_max, time.monotonic() - start)
 
     def stop(self) -> None:
         with self._cond:
             self._running = False
             self._cond.notify()
-        if threading.current_thread() is not self._thread:
-            self._thread.join(timeout=5)
+            thread = self._thread
+        if thread is not None and threading.current_thread() is not thread:
+            thread.join(timeout=5)

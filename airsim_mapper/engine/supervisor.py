@@ -34,7 +34,8 @@ if TYPE_CHECKING:
     from airsim_mapper.engine.engine import Engine
 
 log = ros_logger("airsim_mapper.engine")
-WATCHDOG_PERIOD_S = 0.05
+WATCHDOG_PERIOD_S = 0.05  # the shortest wait between two checks
+WATCHDOG_IDLE_S = 0.5  # the longest
 STATUS_PERIOD_S = 1.0
 RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)
 
@@ -251,12 +252,18 @@ class Supervisor:
 
     # --- watchdog ---------------------------------------------------------------------------
     def _watchdog_loop(self) -> None:
+        """Check the command watchdogs when one can be due: at its deadline while commands flow, at most
+        WATCHDOG_IDLE_S apart otherwise (a new command is due no sooner than its `watchdog_s`)."""
         while self.running:
             now = time.monotonic()
+            wait = WATCHDOG_IDLE_S
             for bridge in list(self.engine.bridges.values()):
                 if isinstance(bridge, RosToSim):
                     try:
-                        bridge.check_watchdog(now)
+                        due = bridge.check_watchdog(now)
                     except Exception:
                         log.exception("watchdog of %s failed", bridge.spec.name)
-            time.sleep(WATCHDOG_PERIOD_S)
+                        continue
+                    if due is not None:
+                        wait = min(wait, due)
+            self._stopping.wait(max(wait, WATCHDOG_PERIOD_S))

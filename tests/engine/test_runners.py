@@ -219,3 +219,20 @@ def test_a_converter_that_raises_something_else_is_a_bridge_error_logged_with_it
     service.start()
     response = ros.services[service.spec.ros].handler(TriggerRequest())
     assert not response.success and "a converter bug" in response.message and service.stats.errors == 1
+
+
+def test_the_watchdog_says_when_it_can_next_be_due(specs, services, sim, ros):
+    """The supervisor sleeps until then instead of polling: the full timeout while no command moves the
+    robot, the rest of it while commands flow."""
+    spec = spec_of(specs, "cmd_vel[Drone1]")
+    bridge = build(spec, services)
+    bridge.start()
+    timeout = spec.options.watchdog_s
+    assert bridge.check_watchdog(time.monotonic()) == timeout  # nothing sent yet
+    twist = Twist()
+    twist.linear.x = 1.0
+    ros.subscribers[spec.ros].handler(twist)
+    assert bridge.check_watchdog(bridge.last_message + 1.0) == pytest.approx(timeout - 1.0)
+    assert bridge.check_watchdog(bridge.last_message + timeout + 0.1) == timeout  # stopped the robot
+    assert not bridge.moving and len(sim.calls) == 2
+    assert bridge.check_watchdog(bridge.last_message + 1.0) == timeout

@@ -55,3 +55,69 @@ def test_a_message_that_waits_behind_a_busy_worker_shows_as_wait() -> None:
         assert peaks["handle_max_ms"] >= 100
     finally:
         stream.stop()
+
+
+def stream_threads() -> list[str]:
+    return [t.name for t in threading.enumerate() if t.name.startswith("stream:")]
+
+
+def test_an_inline_stream_handles_each_message_on_the_offering_thread_with_no_worker() -> None:
+    seen: list[tuple[int, str]] = []
+    sent: list[list] = []
+    stream = Stream(
+        "/inline",
+        sent.append,
+        [lambda m: seen.append((m, threading.current_thread().name)) or ["tf"]],
+        inline=True,
+    )
+    try:
+        assert "stream:/inline" not in stream_threads()
+        for n in range(3):
+            stream.offer(None, n)
+            assert seen[-1] == (n, threading.current_thread().name)  # done before offer returned
+        assert sent == [["tf"]] * 3
+        assert (stream.stats.received, stream.stats.handled, stream.stats.dropped) == (3, 3, 0)
+    finally:
+        stream.stop()
+    stream.offer(None, 9)
+    assert len(seen) == 3  # stopped: nothing more is handled
+
+
+def test_a_failing_inline_handler_is_counted_and_the_others_still_run() -> None:
+    seen: list[int] = []
+
+    def broken(_message) -> None:
+        raise RuntimeError("a handler bug")
+
+    stream = Stream("/inline", None, [broken, seen.append], inline=True)
+    try:
+        stream.offer(None, 1)  # does not raise
+        assert seen == [1] and stream.stats.errors == 1
+    finally:
+        stream.stop()
+
+
+def test_a_heavy_handler_moves_an_inline_stream_to_a_worker_for_good() -> None:
+    threads: list[str] = []
+
+    def light(_message) -> None:
+        threads.append(threading.current_thread().name)
+
+    def heavy(_message) -> None:
+        pass
+
+    stream = Stream("/mixed", None, [light], inline=True)
+    try:
+        stream.offer(None, 1)
+        stream.add_handler(heavy, inline=False)
+        assert "stream:/mixed" in stream_threads()
+        stream.offer(None, 2)
+        wait_until(lambda: len(threads) == 2)
+        assert threads == [threading.current_thread().name, "stream:/mixed"]
+        assert stream.remove_handler(heavy)  # the light one remains
+        stream.offer(None, 3)
+        wait_until(lambda: len(threads) == 3)
+        assert threads[-1] == "stream:/mixed"  # no way back: a message in the slot would be overtaken
+    finally:
+        stream.stop()
+    assert "stream:/mixed" not in stream_threads()

@@ -45,18 +45,30 @@ def test_converters_prints_the_table_and_exits_0(capsys):
 
 def test_the_table_has_one_row_per_converter_in_catalogue_order():
     lines = markdown_table().splitlines()
-    assert lines[0] == "| converter | direction | ROS types | what it does |"
-    assert lines[1] == "|---|---|---|---|"
+    assert lines[0] == "| converter | direction | ROS types | runs on | what it does |"
+    assert lines[1] == "|---|---|---|---|---|"
     names = [re.match(r"\| `([a-z_]+)` \|", line).group(1) for line in lines[2:]]
     assert names == list(CONVERTERS)
 
 
-def test_a_row_names_the_direction_and_every_ros_type_and_escapes_bars_in_the_summary():
+def test_a_row_names_the_direction_every_ros_type_the_thread_and_escapes_bars_in_the_summary():
     services = ("std_srvs/Trigger", "std_srvs/Empty")
     two_types = ConverterInfo("x", ROS_TO_SIM, services, SERVE, "m", "f", "a | b")
     one_type = ConverterInfo("y", SIM_TO_ROS, ("sensor_msgs/Image",), PUBLISH, "m", "f", "s")
-    rows = markdown_table([two_types, one_type]).splitlines()[2:]
+    light = ConverterInfo("z", SIM_TO_ROS, ("sensor_msgs/Imu",), PUBLISH, "m", "f", "t", inline=True)
+    rows = markdown_table([two_types, one_type, light]).splitlines()[2:]
     assert rows == [
-        "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | a \\| b |",
-        "| `y` | sim → ROS | `sensor_msgs/Image` | s |",
+        "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | rospy's callback | a \\| b |",
+        "| `y` | sim → ROS | `sensor_msgs/Image` | its topic's worker | s |",
+        "| `z` | sim → ROS | `sensor_msgs/Imu` | receive thread | t |",
     ]
+
+
+def test_only_light_converters_run_on_the_receive_thread():
+    """An image, cloud or radar conversion on the receive thread would hold every other frame behind it."""
+    heavy = {"sensor_msgs/PointCloud2", "radar_msgs/RadarScan", "radar_msgs/RadarTracks", "sensor_msgs/CameraInfo"}
+    inline = {name for name, info in CONVERTERS.items() if info.inline}
+    assert "pose" in inline and "imu" in inline
+    for name in inline:
+        info = CONVERTERS[name]
+        assert info.direction == SIM_TO_ROS and not info.max_pixels and not heavy & set(info.ros_types), name

@@ -98,7 +98,7 @@ def run(mapping: str, messages: int) -> dict[str, float]:
         def __init__(self) -> None:
             self.handlers: dict[str, list] = {}
 
-        def attach(self, topic: str, handler: Any) -> None:
+        def attach(self, topic: str, handler: Any, inline: bool = False) -> None:
             self.handlers.setdefault(topic, []).append(handler)
 
         def detach(self, topic: str, handler: Any) -> None:
