@@ -26,7 +26,6 @@ import argparse
 import contextlib
 import logging
 import os
-import signal
 import sys
 import threading
 import time
@@ -100,6 +99,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 DEFAULT_NODE_NAME = "projectairsim"
+STOP_CHECK_S = 1.0  # the main loop also checks for a stop this often, should a wake-up be missed
 
 
 def node_identity(nodename: str | None, argv: list[str]) -> tuple[str, str]:
@@ -167,8 +167,7 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     # a busy machine), and from then on it only raises the flag that every step below checks. Before, one
     # in the first second (imports, the mapping, init_node) ended in a traceback or the default action.
     stop = Stopper(0.0, at_once=True)  # its deadline, --shutdown-timeout, is read before it can matter
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, stop)
+    stop.install()
     for number in early_signals or ():
         stop(number, None)
     files_before, files = raise_open_files()
@@ -244,8 +243,9 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
         reloader = serve_reload(
             wrapper.engine, settings["mapping"], prepared.mapping, watch=not args.no_watch
         )
+    rospy.on_shutdown(stop.wake)  # `rosnode kill`, or a shutdown requested from another thread
     while not stopping():
-        time.sleep(0.1)
+        stop.wait(STOP_CHECK_S)
     if reloader is not None:
         reloader.stop()
     rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")

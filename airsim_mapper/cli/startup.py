@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import select
 import signal
 import threading
 import time
@@ -39,6 +40,17 @@ class Stopper:
         self.timeout = timeout
         self.signals: list[int] = []
         self.at_once = at_once  # nothing to undo yet (before rospy.init_node): exit at once, status 0
+        # Written by `wake` and, once installed, by Python's C-level signal handler on whichever thread
+        # took the signal: the main loop's `wait` returns at once.
+        self._woken, self._wake = os.pipe()
+        os.set_blocking(self._woken, False)
+        os.set_blocking(self._wake, False)
+
+    def install(self, signals: tuple[int, ...] = (signal.SIGINT, signal.SIGTERM)) -> int:
+        """Handle `signals` (main thread only); the previous wake-up fd of signals is returned."""
+        for number in signals:
+            signal.signal(number, self)
+        return signal.set_wakeup_fd(self._wake, warn_on_full_buffer=False)
 
     def __call__(self, number: int, _frame: Any) -> None:
         if self.at_once:
@@ -46,9 +58,24 @@ class Stopper:
         if self.signals:
             _say_and_exit(f"second signal ({signal.Signals(number).name}): exiting at once", 128 + number)
         self.signals.append(number)
+        self.wake()
         deadline = threading.Timer(self.timeout, self._overdue)
         deadline.daemon = True
         deadline.start()
+
+    def wake(self) -> None:
+        """End the current and every later `wait` (a signal handler, or rospy's shutdown hook: a write to
+        a pipe takes no lock the interrupted main thread could hold)."""
+        with contextlib.suppress(OSError):
+            os.write(self._wake, b"!")
+
+    def wait(self, timeout: float) -> None:
+        """Sleep until `wake` or a signal, at most `timeout` seconds: the main loop wakes when it has to,
+        not 10 times a second. What woke it is read, so the next wait sleeps again."""
+        if select.select([self._woken], [], [], timeout)[0]:
+            with contextlib.suppress(BlockingIOError):
+                while os.read(self._woken, 512):
+                    pass
 
     def _overdue(self) -> None:
         _say_and_exit(f"shutdown took longer than {self.timeout:g} s (--shutdown-timeout): exiting", 1)

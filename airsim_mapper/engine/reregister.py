@@ -77,7 +77,9 @@ def master_pid(master_uri: str, caller_id: str) -> int | None:
     return pid if code == 1 else None
 
 
-def ask_master(master_uri: str, caller_id: str, node_uri: str) -> tuple[bool, int | None] | None:
+def ask_master(
+    master: xmlrpc.client.ServerProxy, caller_id: str, node_uri: str
+) -> tuple[bool, int | None] | None:
     """Whether the master has `caller_id` registered at `node_uri`, and its pid; None when it does not
     answer. One request (`system.multicall`, which rosmaster serves): the watch asks every second.
 
@@ -85,7 +87,7 @@ def ask_master(master_uri: str, caller_id: str, node_uri: str) -> tuple[bool, in
     to the master it registered with; a restarted master answers "unknown node".
     """
     try:
-        calls = xmlrpc.client.MultiCall(xmlrpc.client.ServerProxy(master_uri))
+        calls = xmlrpc.client.MultiCall(master)
         calls.lookupNode(caller_id, caller_id)
         calls.getPid(caller_id)
         (code, _message, uri), (pid_code, _pid_message, pid) = tuple(calls())
@@ -120,13 +122,16 @@ class MasterWatch:
         self._on_reregistered = on_reregistered
         self._stop = threading.Event()
         self._pid = master_pid(self.master_uri, self.caller_id)
+        # One HTTP/1.1 connection, kept open between polls (rosmaster keeps it alive): no connect per poll.
+        self._master = xmlrpc.client.ServerProxy(self.master_uri)
         self._thread = threading.Thread(target=self._run, name="master-watch", daemon=True)
         self._thread.start()
 
     def _new_master(self) -> int | None:
         """The pid of a master that needs our registrations, or None (no answer, or it has them)."""
-        answer = ask_master(self.master_uri, self.caller_id, self.node_uri)
+        answer = ask_master(self._master, self.caller_id, self.node_uri)
         if answer is None:
+            self._master = xmlrpc.client.ServerProxy(self.master_uri)  # a new connection next time
             return None
         known, pid = answer
         return pid if needs_registration(known, pid, self._pid) else None
