@@ -168,6 +168,7 @@ class FakeRos:
     tf_cleared: int = 0  # forget_tf calls
     refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
     made: list[FakePublisher] = field(default_factory=list)  # every publisher ever made, in order
+    tf_subscribed: bool = True  # /tf has a subscriber: transforms are built and sent
 
     def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
         message_class(ros_type)  # the type must exist, as rospy would require
@@ -188,6 +189,9 @@ class FakeRos:
 
     def now(self) -> genpy.Time:
         return genpy.Time(100, 0)
+
+    def tf_wanted(self) -> bool:
+        return self.tf_subscribed
 
     def send_tf(self, transforms: list) -> None:
         self.transforms.extend(transforms)

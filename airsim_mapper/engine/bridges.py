@@ -218,7 +218,7 @@ class SimToRos(Bridge):
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp
-        if self.spec.tf is None:
+        if self.spec.tf is None or not self.services.ros.tf_wanted():
             return None
         try:
             return [self._transform(out, message)]

@@ -57,13 +57,22 @@ class TfBroadcaster:
         self._broadcaster: tf2_ros.TransformBroadcaster | None = None
         self._lock = threading.Lock()
 
-    def send(self, transforms: list[TransformStamped]) -> None:
-        if not transforms:
-            return
+    def _ready(self) -> tf2_ros.TransformBroadcaster:
         with self._lock:
             if self._broadcaster is None:
                 self._broadcaster = tf2_ros.TransformBroadcaster()
-            self._broadcaster.sendTransform(transforms)
+            return self._broadcaster
+
+    def send(self, transforms: list[TransformStamped]) -> None:
+        if transforms:
+            self._ready().sendTransform(transforms)
+
+    def wanted(self) -> bool:
+        """Whether a tf message now would reach anyone: /tf has a subscriber. rospy drops a message
+        nobody subscribes to, so a pose's transform need not be built then. The first call advertises
+        /tf, so that subscribers find it."""
+        broadcaster = self._broadcaster or self._ready()
+        return broadcaster.pub_tf.get_num_connections() > 0
 
 
 class StaticTf:
@@ -137,6 +146,10 @@ class RosLink:
 
     def send_tf(self, transforms: list[TransformStamped]) -> None:
         self.tf.send(transforms)
+
+    def tf_wanted(self) -> bool:
+        """Whether /tf has a subscriber (`TfBroadcaster.wanted`)."""
+        return self.tf.wanted()
 
     def set_static_tf(self, transform: TransformStamped) -> None:
         """Add or replace (by child frame) a transform on /tf_static."""

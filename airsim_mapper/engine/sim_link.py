@@ -36,6 +36,7 @@ from airsim_mapper.engine.fast_frames import Buffer, parse_frame_header
 from airsim_mapper.engine.health import PROBE_METHOD
 from airsim_mapper.engine.receive import (
     CURRENT_LINK,
+    FAST_MIN_BYTES,
     RECEIVE_THREAD,
     close_client,
     decode_body,
@@ -179,8 +180,10 @@ class SimLink:
             )
             return
         try:
-            header = parse_frame_header(packed)
-            if header is None:  # any other framing: msgpack's path, as the client reads it
+            # The header parser keeps a large body where it was received; a small frame is cheaper whole
+            # through msgpack's C decoder.
+            header = parse_frame_header(packed) if len(packed) >= FAST_MIN_BYTES else None
+            if header is None:  # small, or any other framing: msgpack's path, as the client reads it
                 frame = msgpack.unpackb(packed, raw=True)
                 frame_type, topic, body = frame[0], frame[1].decode("utf-8"), frame[2]
             else:  # the body stays where it was received: no copy

@@ -236,3 +236,22 @@ def test_the_watchdog_says_when_it_can_next_be_due(specs, services, sim, ros):
     assert bridge.check_watchdog(bridge.last_message + timeout + 0.1) == timeout  # stopped the robot
     assert not bridge.moving and len(sim.calls) == 2
     assert bridge.check_watchdog(bridge.last_message + 1.0) == timeout
+
+
+def test_a_pose_builds_its_transform_only_while_tf_has_a_subscriber(specs, services, ros):
+    """rospy would drop a tf message nobody subscribes to: its transform is not even built then."""
+    bridge = build(spec_of(specs, "actual_pose[Drone1]"), services)
+    bridge.start()
+    pose = {
+        "time_stamp": 2_000_000_000,
+        "position": {"x": 1.0, "y": 2.0, "z": -3.0},
+        "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+    }
+    ros.tf_subscribed = False
+    assert bridge.handle(pose) is None
+    ros.tf_subscribed = True
+    [transform] = bridge.handle(pose)
+    tf = bridge.spec.tf
+    assert (transform.header.frame_id, transform.child_frame_id) == (tf.parent, tf.child)
+    assert transform.transform.translation.x == 1.0 and bridge.stats.messages == 2
+    bridge.stop()

@@ -85,6 +85,9 @@ def run(mapping: str, messages: int) -> dict[str, float]:
 
             return genpy.Time(1, 0)
 
+        def tf_wanted(self) -> bool:
+            return True  # the transforms are built and serialised, as with a /tf subscriber
+
         def send_tf(self, transforms: list) -> None:
             self.tf.publish(TFMessage(transforms))
 
