@@ -106,17 +106,20 @@ class Diagnostics:
         report = getattr(self.engine, "mapping_report", None)
         if report:
             out.append(mapping_status(report, self.prefix))
-        seen_now: dict[str, _Seen] = {}
-        for name, bridge in list(self.engine.bridges.items()):
+        bridges = list(self.engine.bridges.items())
+        for name, bridge in bridges:
             topic = getattr(bridge, "topic", None)
             drops = streams[topic].stats.dropped if topic in streams else 0
             seen = self._seen.get(name, _Seen())
             out.append(bridge_status(bridge, seen, now, drops, self.prefix))
-            seen_now[name] = _Seen(bridge.stats.messages, bridge.stats.errors, now)
-        self._seen = seen_now
+        self._note(bridges, now)
         refused = getattr(self.engine, "refused_bridges", dict)()
         out += [refused_status(name, why, self.prefix) for name, why in refused.items()]
         return out
+
+    def _note(self, bridges: list[tuple[str, Bridge]], now: float) -> None:
+        """Each bridge's counts now: the next report's rates start here."""
+        self._seen = {name: _Seen(b.stats.messages, b.stats.errors, now) for name, b in bridges}
 
     def connection_status(self, now: float | None = None) -> dict[str, Any]:
         """The simulator entry: ERROR while not connected, WARN for a while after sim time went back."""
@@ -150,9 +153,14 @@ class Diagnostics:
         }
 
     def publish(self) -> None:
+        """One report; while nobody subscribes, only the counts its rates start from (rospy would drop
+        the message, and with thousands of bridges building it took a tenth of a core)."""
         import rospy
         from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
+        if self.publisher.get_num_connections() == 0:
+            self._note(list(self.engine.bridges.items()), time.monotonic())
+            return
         array = DiagnosticArray()
         array.header.stamp = rospy.Time.now()
         for status in self.statuses(time.monotonic()):

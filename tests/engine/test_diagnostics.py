@@ -33,3 +33,45 @@ def test_a_recent_jump_back_in_sim_time_is_a_warning_on_the_simulator_entry():
     assert status["message"] == "connected; simulation time went back 5.000 s 1 s ago (1 jumps back in all)"
     assert status["values"]["sim_time_jumps_back"] == "1"
     assert diagnostics(sim_time=watch).connection_status(now=100.0)["level"] == OK
+
+
+class Publisher:
+    def __init__(self, connections: int) -> None:
+        self.connections, self.sent = connections, []
+
+    def get_num_connections(self) -> int:
+        return self.connections
+
+    def publish(self, message) -> None:
+        self.sent.append(message)
+
+
+def test_nothing_is_built_while_nobody_subscribes_and_the_next_rate_starts_from_the_skipped_report(
+    monkeypatch,
+):
+    import rospy
+
+    from airsim_mapper.engine import diagnostics as module
+
+    clock = iter([10.0, 12.0])
+    monkeypatch.setattr(module.time, "monotonic", lambda: next(clock))
+    monkeypatch.setattr(rospy.Time, "now", staticmethod(lambda: rospy.Time(1)))
+    bridge = SimpleNamespace(
+        stats=SimpleNamespace(messages=0, errors=0, last_time=0.0, last_error="", stale_dropped=0, clamped=0),
+        spec=SimpleNamespace(direction="sim_to_ros", sim="/s", ros="/r", name="imu"),
+        _attached=False,
+    )
+    made = diagnostics(hub=SimpleNamespace(streams=dict))
+    made.engine.bridges = {"imu": bridge}
+    made._seen = {}
+    made.publisher = Publisher(connections=0)
+    bridge.stats.messages = 500  # before the skipped report (t = 10 s): not in the next rate
+    made.publish()
+    assert made.publisher.sent == [] and made._seen["imu"].messages == 500
+    made.publisher.connections = 1
+    bridge.stats.messages = 700
+    made.publish()  # t = 12 s
+    [array] = made.publisher.sent
+    [status] = [s for s in array.status if s.name == "node: imu"]
+    values = {kv.key: kv.value for kv in status.values}
+    assert (values["messages"], values["rate_hz"]) == ("700", "100.00")
