@@ -64,8 +64,8 @@ class Stopper:
         deadline.start()
 
     def wake(self) -> None:
-        """End the current and every later `wait` (a signal handler, or rospy's shutdown hook: a write to
-        a pipe takes no lock the interrupted main thread could hold)."""
+        """End the current `wait`, or the next one (from a signal handler, or rospy's shutdown hook: a
+        write to a pipe takes no lock the interrupted main thread could hold)."""
         with contextlib.suppress(OSError):
             os.write(self._wake, b"!")
 
