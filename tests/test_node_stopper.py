@@ -24,10 +24,13 @@ def test_a_wake_from_another_thread_ends_the_wait():
     assert time.monotonic() - started < 1.0
 
 
-def test_a_signal_ends_the_wait_at_once():
+def test_a_signal_ends_the_wait_at_once(monkeypatch):
     """Even one taken by another thread (which then runs no Python): the wake-up comes from the C-level
-    handler."""
-    stop = Stopper(30.0)
+    handler. The signal also arms the shutdown deadline, which here records instead of ending the process
+    (it would end pytest itself)."""
+    overdue = threading.Event()
+    monkeypatch.setattr(Stopper, "_overdue", lambda _self: overdue.set())
+    stop = Stopper(1.0)
     previous = signal.getsignal(signal.SIGUSR1)
     previous_fd = stop.install((signal.SIGUSR1,))
     try:
@@ -39,6 +42,7 @@ def test_a_signal_ends_the_wait_at_once():
         started = time.monotonic()
         stop.wait(0.2)  # what woke the first wait was read: this one sleeps
         assert time.monotonic() - started >= 0.18
+        assert overdue.wait(5)  # the deadline, --shutdown-timeout, was armed by the signal
     finally:
         signal.signal(signal.SIGUSR1, previous)
         signal.set_wakeup_fd(previous_fd)
