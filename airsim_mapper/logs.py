@@ -15,10 +15,13 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from typing import Callable
 
 __all__ = ["SHOWN_NAME", "CallerLogger", "RateLimitedLog", "caller_logger", "ros_logger", "shorten"]
+__all__ += ["wait_for_rosout"]
 
 SHOWN_NAME = 200  # characters of a user-given name (a scene file, say) a log line shows
+ROSOUT_WAIT_S = 2.0  # how long a node waits for the rosout node to connect before it logs on
 
 
 class CallerLogger(logging.Logger):
@@ -71,6 +74,35 @@ class RateLimitedLog:
             held, self._held = self._held, 0
         suffix = f" ({held} more not logged before this one)" if held else ""
         self.logger.log(self.level, "%s%s%s", self.prefix, message, suffix, exc_info=exc_info)
+
+
+def wait_for_rosout(timeout: float = ROSOUT_WAIT_S, stopping: Callable[[], bool] = lambda: False) -> bool:
+    """Wait, at most `timeout` seconds, until the rosout node listens to this node's /rosout.
+
+    /rosout latches: a subscriber that connects late gets only the last record. The rosout node connects a
+    moment after init_node, and a node that starts quickly has by then logged its settings and its bridge
+    table, which never reached rosout.log or rqt_console. Returns False at once when nothing subscribes
+    to /rosout (a master started with `--core`), when rospy is not logging to it, or on `stopping()`.
+    """
+    import rosgraph
+    import rospy
+    from rospy.impl import rosout
+
+    publisher = rosout._rosout_pub
+    if publisher is None:
+        return False
+    try:
+        _publishers, subscribers, _services = rosgraph.Master(rospy.get_name()).getSystemState()
+    except Exception:  # the master went away: the records go to the console and the log file only
+        return False
+    if not any(topic == "/rosout" and nodes for topic, nodes in subscribers):
+        return False
+    deadline = time.monotonic() + timeout
+    while not publisher.get_num_connections():
+        if stopping() or time.monotonic() >= deadline:
+            return False
+        time.sleep(0.01)
+    return True
 
 
 def shorten(text: str, keep: int = SHOWN_NAME) -> str:

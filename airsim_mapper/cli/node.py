@@ -36,7 +36,7 @@ from airsim_mapper.cli.limits import raise_open_files, shortfall
 from airsim_mapper.cli.settings import SETTINGS, given_settings, resolve_settings, values
 from airsim_mapper.cli.startup import StartUp, Stopper, connect
 from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import ros_logger
+from airsim_mapper.logs import ros_logger, wait_for_rosout
 from airsim_mapper.mapping.names import resolve_namespace
 
 if TYPE_CHECKING:
@@ -192,6 +192,7 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     # and the node hung (seen in CI). Here the handler only raises a flag; the hooks run from the loop below.
     stop.at_once = False  # rospy.init_node registers the node: a signal from now on shuts it down in order
     rospy.init_node(node_name, disable_signals=True)
+    wait_for_rosout(stopping=lambda: bool(stop))  # so that the settings and the bridge table reach rosout.log
     try:
         resolved = resolve_settings(given, rospy.get_param)  # KeyError when unset
     except SettingError as exc:

@@ -39,6 +39,9 @@ def test_the_stock_tools_read_radar_live_and_from_a_bag(launcher: Rig) -> None:
     records = [line for line in rosout_log.read_text().splitlines() if " /projectairsim [" in line]
     assert records and not [line for line in records if "threading.py" in line], records[:3]
     assert any(" [node.py:" in line and "(main)]" in line for line in records), records[:3]
+    # /rosout latches only its last record: those the node logs before rosout connects must not be lost
+    assert any("] setting scene = " in line for line in records), records[:3]
+    assert any("] bridges:" in line for line in records), records[:3]
 
     info = stock_tool(launcher, f"/usr/bin/rosbag info {bag}")
     assert "radar_msgs/RadarScan" in info.stdout and "radar_msgs/RadarTracks" in info.stdout, info.stdout
