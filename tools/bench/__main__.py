@@ -31,6 +31,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         "client_pose": {},
         "scale": {},
         "forwarder": {},
+        "receive_floor": {},
     }
     floor = out["forwarder"]
     base = out["baselines"]
@@ -86,6 +87,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         if drones == SCALE_DRONES[-1]:
             with bench.forwarder_session(scene, camera=True) as session:
                 floor["scale"] = session.probe(f"forwarder_scale{drones}", topics)
+            out["receive_floor"]["scale"] = bench.receive_floor(scene, camera=True)
     return out
 
 

@@ -144,6 +144,24 @@ class Bench:
         with client as session:
             yield session
 
+    def receive_floor(self, scene_file: str, camera: bool = False) -> dict[str, Any]:
+        """The poses through the bridge's receive loop alone, no ROS (receive_floor.py), on a replay
+        server."""
+        out = self.workdir / f"receive_floor_{Path(scene_file).stem}.json"
+        args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(self.duration_s)]
+        args += ["--camera"] if camera else []
+        module = "tools.bench.receive_floor"
+        with self._replay_client("receive_floor", module, scene_file, "receiver", args) as session:
+            wait_line(session.node, "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
+            before = sample(session.server.pid)
+            wait_line(session.node, "done", self.duration_s + 30)
+            after = sample(session.server.pid)
+            wait_until(out.exists, 10, out.name)
+            time.sleep(0.1)
+            result = json.loads(out.read_text())
+        result["server_cpu_cores"] = cpu_share(before, after)
+        return result
+
     @contextlib.contextmanager
     def _replay_client(
         self, name: str, module: str, scene_file: str, role: str, args: Sequence[str]

@@ -89,3 +89,25 @@ def test_the_bare_forwarder_carries_pose_and_images_from_the_replay_server(tmp_p
     assert pose["rate_hz"] > 50 and image["rate_hz"] > 5
     assert image["message_bytes"] > 320 * 240 * 3
     assert result["forwarder_cpu_cores"] > 0 and result["server_cpu_cores"] > 0
+
+
+def test_the_ten_drone_latency_target_names_the_forwarder_and_the_receive_floor():
+    e2e = _e2e()
+    poses = {scenes.pose_topic(i): (100.0, 2.5) for i in (1, 2)}
+    e2e["receive_floor"] = {"scale": _result("receiver", 0.05, poses)}
+    (row,) = [t for t in report.floor_targets(e2e) if t["target"] == "2 drones: worst pose p99"]
+    assert "bare forwarder 3.00 ms" in row["note"] and "no ROS: 2.50 ms" in row["note"]
+
+
+@pytest.mark.live
+def test_the_receive_floor_takes_every_robots_poses_without_ros(tmp_path):
+    bench = Bench(tmp_path, warmup_s=0.5, duration_s=2.0)
+    try:
+        scene = bench.scene("receive", 2, scenes.CameraSetup(320, 240, 0.1, (0,)))
+        result = bench.receive_floor(scene, camera=True)
+    finally:
+        bench.close()
+    assert set(result["topics"]) == {scenes.pose_topic(1), scenes.pose_topic(2)}
+    for pose in result["topics"].values():
+        assert pose["rate_hz"] > 50 and 0 < pose["latency_p50_ms"] <= pose["latency_p99_ms"] < 1000
+    assert result["receiver_cpu_cores"] > 0 and result["server_cpu_cores"] > 0
