@@ -111,3 +111,25 @@ def test_the_receive_floor_takes_every_robots_poses_without_ros(tmp_path):
     for pose in result["topics"].values():
         assert pose["rate_hz"] > 50 and 0 < pose["latency_p50_ms"] <= pose["latency_p99_ms"] < 1000
     assert result["receiver_cpu_cores"] > 0 and result["server_cpu_cores"] > 0
+
+
+def test_the_bridge_cpu_per_frame_is_judged_against_receiving_and_publishing_it_raw():
+    def raw(role: str, cores: float) -> dict:
+        topics = {"/bench/raw": {"rate_hz": 30.0, "latency_p50_ms": 10.0, "latency_p99_ms": 12.0}}
+        return {f"{role}_cpu_cores": cores, "topics": topics}
+
+    costs = {report.LIDAR: {"bridge_ms": 1.0, "speedup_vs_reference": 20.0}, report.DEPTH: {"bridge_ms": 1.0}}
+    costs[report.BGR] = {"ratio_to_bare_serialize": 1.0, "bare_serialize_ms": 2.0}
+    e2e = {
+        **_e2e(),
+        "baselines": {"rospy_image": raw("publisher", 0.09), "pynng_image": raw("receiver", 0.135)},
+        "scale": {},
+    }
+    (row,) = [
+        t
+        for t in report.targets({"costs": costs, "e2e": e2e})
+        if t["target"].startswith("1080p BGR bridge CPU per")
+    ]
+    # (0.35 - 0.05) / 30 = 10 ms a frame, against 4.5 ms to receive it and 3 ms to publish it
+    assert round(row["value"], 3) == 1.333 and row["met"] is False
+    assert "receive 4.5 + publish 3.0 ms" in row["note"] and "publisher alone: 3.33x" in row["note"]
