@@ -1,6 +1,7 @@
 """Live mapping reloads leak nothing: 200 edits, each restarting 9 topics, leave open files, threads and
 memory where they were after the first 20. The node's heap is frozen, so a stopped bridge must be freed by
-reference counting (tests/engine/test_freed_on_stop.py); its cycles used to stay, about 38 kB an edit."""
+reference counting (tests/engine/test_freed_on_stop.py); its cycles used to stay, about 38 kB an edit.
+Scene reloads, each replacing every bridge of the scene, level off the same way."""
 
 from __future__ import annotations
 
@@ -14,6 +15,9 @@ from reliability.relkit import ROBOT, SCENE, SimPorts, probe, start_node, start_
 
 RELOADS, WARM_UP = 200, 20
 MEMORY_BOUND_MB = 1.5  # over the 180 edits after the warm-up
+# RSS rises for the first scene reloads (about 0.5 MB at the first, less each time, 5 MB in all) and is
+# flat from about the 25th; a leak of the replaced bridges would add more than the bound in 15 reloads.
+SCENE_RELOADS, SCENE_WARM_UP, SCENE_MEMORY_BOUND_MB = 40, 25, 1.0
 # Each edit changes the queue size of every IMU and camera image bridge: each one stops and starts again.
 MAPPING = """version: 1
 extends: default
@@ -67,4 +71,35 @@ def test_two_hundred_mapping_reloads_leak_no_files_threads_or_memory(
     # 6.5-7 MB when the stopped bridges stayed in the frozen heap; allocator noise is far below the bound
     # (docs/reliability.md, "A reload's memory")
     assert rss1 - rss0 < MEMORY_BOUND_MB, "memory grew with the reloads"
+    assert "Traceback" not in node.output()
+
+
+def test_forty_scene_reloads_level_off_in_memory_and_leak_no_files_or_threads(
+    launcher: Rig, ros_master: RosMaster
+):
+    ports = SimPorts.free()
+    start_server(launcher, ports)
+    node = start_node(launcher, ports, "--scene", SCENE, node_name="scenes")
+    wait_output(node, f"({SCENE}) loaded", 60)
+    # the heavy streams run too: a camera and the IMU are subscribed throughout
+    for name, topic in (("imu", f"{ROBOT}/IMU1/imu"), ("camera", f"{ROBOT}/DownCamera/scene_camera/image")):
+        wait_output(probe(launcher, name, "watch", topic), "READY", 20)
+    loaded, topic = f"({SCENE}) loaded", "/ProjectAirSim/node/scenes/load_scene"
+    marks = {}
+    for batch, total in ((SCENE_WARM_UP, SCENE_WARM_UP), (SCENE_RELOADS - SCENE_WARM_UP, SCENE_RELOADS)):
+        # one load_scene every 0.5 s, more than a load takes here: none waits behind another
+        sender = probe(launcher, f"load_{total}", "strings", topic, *[SCENE] * batch)
+        wait_until(lambda t=total: node.output().count(loaded) > t, 60, interval=0.1, what=f"{total} reloads")
+        launcher.stop(sender)
+        time.sleep(1.0)  # the sender's and the restarted subscribers' connections settle
+        marks[total] = counts(node.pid)
+    (files0, threads0, rss0), (files1, threads1, rss1) = marks[SCENE_WARM_UP], marks[SCENE_RELOADS]
+    print(
+        f"after {SCENE_WARM_UP} scene reloads: {files0} files, {threads0} threads, {rss0:.1f} MB; "
+        f"after {SCENE_RELOADS}: {files1} files, {threads1} threads, {rss1:.1f} MB"
+    )
+    assert "queued behind" not in node.output() and "refused" not in node.output()
+    assert files1 - files0 <= 2, "open files grew with the scene reloads"
+    assert threads1 - threads0 <= 2, "threads grew with the scene reloads"
+    assert rss1 - rss0 < SCENE_MEMORY_BOUND_MB, "memory grew with the scene reloads"
     assert "Traceback" not in node.output()
