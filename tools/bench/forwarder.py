@@ -54,25 +54,38 @@ def forward_image(publisher: Any, frame_id: str) -> Any:
     return callback
 
 
-def main(argv: list[str] | None = None) -> int:
-    import rospy
-    from geometry_msgs.msg import PoseStamped
-    from projectairsim import ProjectAirSimClient, World
-    from sensor_msgs.msg import Image
-
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def scene_arguments(description: str) -> argparse.ArgumentParser:
+    """The switches of a bench process that connects to the replay server and loads a scene."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--address", default="127.0.0.1")
     parser.add_argument("--topicsport", type=int, required=True)
     parser.add_argument("--servicesport", type=int, required=True)
     parser.add_argument("--simconfigpath", required=True)
     parser.add_argument("--scene", required=True)
-    parser.add_argument("--camera", action="store_true", help="also forward each robot's scene image")
-    args, _ros_args = parser.parse_known_args(argv)
-    rospy.init_node("bench_forwarder", disable_signals=True)
+    return parser
+
+
+def load_scene(args: argparse.Namespace) -> tuple[Any, dict]:
+    """The real client, connected, with the scene loaded; and the scene file's contents."""
+    from projectairsim import ProjectAirSimClient, World
+
     scene = json.loads((Path(args.simconfigpath) / args.scene).read_text())
     client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
     client.connect()
     World(client, args.scene, sim_config_path=args.simconfigpath.rstrip("/") + "/")
+    return client, scene
+
+
+def main(argv: list[str] | None = None) -> int:
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import Image
+
+    parser = scene_arguments(__doc__.splitlines()[0])
+    parser.add_argument("--camera", action="store_true", help="also forward each robot's scene image")
+    args, _ros_args = parser.parse_known_args(argv)
+    rospy.init_node("bench_forwarder", disable_signals=True)
+    client, scene = load_scene(args)
     publishers = []
     for actor in scene["actors"]:
         robot, sim = actor["name"], f"/Sim/{scene['id']}/robots/{actor['name']}"

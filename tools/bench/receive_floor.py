@@ -15,7 +15,6 @@ bridge names them, so the report treats both alike) with its own CPU as `receive
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import threading
@@ -24,29 +23,20 @@ from pathlib import Path
 from typing import Any
 
 from tools.bench import scenes
+from tools.bench.forwarder import load_scene, scene_arguments
 from tools.bench.probe import TopicRecord, summary
 
 
 def main(argv: list[str] | None = None) -> int:
-    from projectairsim import ProjectAirSimClient, World
-
     from airsim_mapper.engine.sim_link import SimLink
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--address", default="127.0.0.1")
-    parser.add_argument("--topicsport", type=int, required=True)
-    parser.add_argument("--servicesport", type=int, required=True)
-    parser.add_argument("--simconfigpath", required=True)
-    parser.add_argument("--scene", required=True)
+    parser = scene_arguments(__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
     parser.add_argument("--camera", action="store_true", help="also receive each robot's scene image")
     parser.add_argument("--warmup", type=float, default=2.0)
     parser.add_argument("--duration", type=float, default=8.0)
     args = parser.parse_args(argv)
-    scene = json.loads((Path(args.simconfigpath) / args.scene).read_text())
-    client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
-    client.connect()
-    World(client, args.scene, sim_config_path=args.simconfigpath.rstrip("/") + "/")
+    client, scene = load_scene(args)
     link = SimLink(client)
     records: dict[str, TopicRecord] = {}
     recording = threading.Event()
