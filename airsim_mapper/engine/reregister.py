@@ -68,15 +68,6 @@ def register_all(master_uri: str, caller_id: str, node_uri: str) -> Registered:
     return Registered(len(publications), len(subscriptions), len(service_list))
 
 
-def master_pid(master_uri: str, caller_id: str) -> int | None:
-    """The master's pid, or None when it does not answer."""
-    try:
-        code, _message, pid = xmlrpc.client.ServerProxy(master_uri).getPid(caller_id)
-    except Exception:
-        return None
-    return pid if code == 1 else None
-
-
 def ask_master(
     master: xmlrpc.client.ServerProxy, caller_id: str, node_uri: str
 ) -> tuple[bool, int | None] | None:
@@ -121,9 +112,10 @@ class MasterWatch:
         self.count = 0
         self._on_reregistered = on_reregistered
         self._stop = threading.Event()
-        self._pid = master_pid(self.master_uri, self.caller_id)
         # One HTTP/1.1 connection, kept open between polls (rosmaster keeps it alive): no connect per poll.
         self._master = xmlrpc.client.ServerProxy(self.master_uri)
+        answer = ask_master(self._master, self.caller_id, self.node_uri)
+        self._pid = None if answer is None else answer[1]  # the master this node registered with
         self._thread = threading.Thread(target=self._run, name="master-watch", daemon=True)
         self._thread.start()
 

@@ -88,15 +88,20 @@ class Bench:
             *topics,
         )
         try:
-            wait_line(probe, "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
-            before = {name: sample(child.pid) for name, child in watched.items()}
-            wait_line(probe, "done", self.duration_s + 30)
-            after = {name: sample(child.pid) for name, child in watched.items()}
-            wait_until(out.exists, 10, f"{out.name}")
-            time.sleep(0.1)
-            result = json.loads(out.read_text())
+            return self._collect(probe, out, watched)
         finally:
             self.procs.stop(probe)
+
+    def _collect(self, measurer: Child, out: Path, watched: dict[str, Child]) -> dict[str, Any]:
+        """The JSON result `measurer` writes to `out` between its `measuring` and `done` lines, with the
+        CPU, RSS and minor faults of the `watched` processes meanwhile."""
+        wait_line(measurer, "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
+        before = {name: sample(child.pid) for name, child in watched.items()}
+        wait_line(measurer, "done", self.duration_s + 30)
+        after = {name: sample(child.pid) for name, child in watched.items()}
+        wait_until(out.exists, 10, f"{out.name}")
+        time.sleep(0.1)
+        result = json.loads(out.read_text())
         for name in watched:
             result[f"{name}_cpu_cores"] = cpu_share(before[name], after[name])
             result[f"{name}_rss_mb"] = after[name].rss_mb
@@ -152,15 +157,7 @@ class Bench:
         args += ["--camera"] if camera else []
         module = "tools.bench.receive_floor"
         with self._replay_client("receive_floor", module, scene_file, "receiver", args) as session:
-            wait_line(session.node, "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
-            before = sample(session.server.pid)
-            wait_line(session.node, "done", self.duration_s + 30)
-            after = sample(session.server.pid)
-            wait_until(out.exists, 10, out.name)
-            time.sleep(0.1)
-            result = json.loads(out.read_text())
-        result["server_cpu_cores"] = cpu_share(before, after)
-        return result
+            return self._collect(session.node, out, {"server": session.server})
 
     @contextlib.contextmanager
     def _replay_client(
