@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.geometry import quat_conjugate, quat_multiply
+from airsim_mapper.geometry import Quat, Vec3, q_mul, quat_conjugate, quat_multiply
 
 _H = math.sqrt(0.5)
 
@@ -34,6 +34,8 @@ R_FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])
 Q_FRD_OPTICAL = np.array([0.5, 0.5, 0.5, 0.5])
 Q_FLU_OPTICAL = np.array([0.5, -0.5, 0.5, -0.5])
 
+_Q_NED_TO_ENU: Quat = tuple(Q_NED_TO_ENU.tolist())  # type: ignore[assignment]
+_Q_FLU_TO_FRD: Quat = tuple(Q_FLU_TO_FRD.tolist())  # type: ignore[assignment]
 _SWAP = np.array([1, 0, 2])
 _NED_ENU_SIGN = np.array([1.0, 1.0, -1.0])
 _FRD_FLU_SIGN = np.array([1.0, -1.0, -1.0])
@@ -50,6 +52,12 @@ def canonical(q: np.ndarray) -> np.ndarray:
 def ned_to_enu(points: np.ndarray) -> np.ndarray:
     """World points or vectors NED -> ENU: (x, y, z) -> (y, x, -z)."""
     return np.asarray(points, dtype=float)[..., _SWAP] * _NED_ENU_SIGN
+
+
+def ned_to_enu_floats(point: Vec3) -> Vec3:
+    """`ned_to_enu` of one point given as floats (a pose message's position)."""
+    x, y, z = point
+    return y, x, z * -1.0
 
 
 def enu_to_ned(points: np.ndarray) -> np.ndarray:
@@ -70,6 +78,12 @@ def flu_to_frd(points: np.ndarray) -> np.ndarray:
 def ned_frd_to_enu_flu(q_ned_frd: np.ndarray) -> np.ndarray:
     """Attitude of an FRD body in NED -> attitude of the FLU body in ENU."""
     return canonical(quat_multiply(quat_multiply(Q_NED_TO_ENU, q_ned_frd), Q_FLU_TO_FRD))
+
+
+def ned_frd_to_enu_flu_floats(q_ned_frd: Quat) -> Quat:
+    """`ned_frd_to_enu_flu` of one (w, x, y, z) attitude given as floats: the same products, bit for bit."""
+    w, x, y, z = q_mul(q_mul(_Q_NED_TO_ENU, q_ned_frd), _Q_FLU_TO_FRD)
+    return (-w, -x, -y, -z) if w < 0.0 else (w, x, y, z)
 
 
 def enu_flu_to_ned_frd(q_enu_flu: np.ndarray) -> np.ndarray:

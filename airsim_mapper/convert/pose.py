@@ -7,9 +7,9 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
+from geometry_msgs.msg import Pose, PoseStamped
 
-from airsim_mapper.convert import frames, sim_fields
+from airsim_mapper.convert import frames, messages, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.stamps import header
@@ -22,21 +22,24 @@ def ros_pose(position: Any, q_wxyz: Any) -> Pose:
     """geometry_msgs/Pose of a position and a (w, x, y, z) quaternion (arrays or float sequences)."""
     x, y, z = map(float, position)
     w, qx, qy, qz = map(float, q_wxyz)
-    return Pose(position=Point(x, y, z), orientation=Quaternion(qx, qy, qz, w))
+    return messages.pose(x, y, z, w, qx, qy, qz)
 
 
-def world_pose(position: np.ndarray, q_ned_frd: np.ndarray, ctx: ConvertContext) -> Pose:
-    """A world NED/FRD pose as a ROS Pose in the context's convention."""
+def world_pose(position: Any, q_ned_frd: Any, ctx: ConvertContext) -> Pose:
+    """A world NED/FRD pose (arrays or float sequences) as a ROS Pose in the context's convention."""
     if ctx.enu:
-        return ros_pose(frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q_ned_frd))
+        return ros_pose(
+            frames.ned_to_enu_floats(tuple(map(float, position))),
+            frames.ned_frd_to_enu_flu_floats(tuple(map(float, q_ned_frd))),
+        )
     return ros_pose(position, q_ned_frd)
 
 
 @sim_fields.converter("pose")
 def pose_stamped(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     """sim PoseStamped {time_stamp, position, orientation} -> geometry_msgs/PoseStamped."""
-    position, q = sim_fields.pose(msg)
-    return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
+    position, q = sim_fields.pose_floats(msg)
+    return messages.pose_stamped(header(msg, ctx), world_pose(position, q, ctx))
 
 
 def camera_pose_key(robot_name: str | None, camera_name: str | None) -> tuple[str, Any, Any]:

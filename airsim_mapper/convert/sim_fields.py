@@ -87,28 +87,47 @@ def number_field(msg: Any, key: str, where: str = "message", finite: bool = True
 
 def vector3(msg: Any, key: str, where: str = "message") -> np.ndarray:
     """A sim Vector3 ``{x, y, z}`` as a float array (finite)."""
+    return np.array(vector3_floats(msg, key, where))
+
+
+def vector3_floats(msg: Any, key: str, where: str = "message") -> tuple[float, float, float]:
+    """A sim Vector3 ``{x, y, z}`` as three finite floats."""
     name = key if where == "message" else f"{where}.{key}"
     value = as_map(field(msg, key, where), name)
-    return np.array(
-        [number_field(value, "x", name), number_field(value, "y", name), number_field(value, "z", name)]
-    )
+    return number_field(value, "x", name), number_field(value, "y", name), number_field(value, "z", name)
 
 
 def quaternion(msg: Any, key: str, where: str = "message") -> np.ndarray:
     """A sim Quaternion ``{w, x, y, z}`` as a (w, x, y, z) float array; finite and non-zero."""
+    return np.array(quaternion_floats(msg, key, where))
+
+
+def quaternion_floats(msg: Any, key: str, where: str = "message") -> tuple[float, float, float, float]:
+    """A sim Quaternion ``{w, x, y, z}`` as four finite floats (w, x, y, z), not all zero."""
     name = key if where == "message" else f"{where}.{key}"
     value = as_map(field(msg, key, where), name)
-    w, x, y, z = (number_field(value, axis, name) for axis in "wxyz")
+    w = number_field(value, "w", name)
+    x = number_field(value, "x", name)
+    y = number_field(value, "y", name)
+    z = number_field(value, "z", name)
     if not (w or x or y or z):
         raise ConversionError(f"{name} is a zero quaternion")
-    return np.array([w, x, y, z])
+    return w, x, y, z
 
 
 def pose(msg: Any, key: str | None = None, where: str = "message") -> tuple[np.ndarray, np.ndarray]:
     """(position, quaternion) of a sim Pose ``{position, orientation}`` (``msg`` itself if key is None)."""
+    position, q = pose_floats(msg, key, where)
+    return np.array(position), np.array(q)
+
+
+def pose_floats(
+    msg: Any, key: str | None = None, where: str = "message"
+) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """`pose` as plain floats: ((x, y, z), (w, x, y, z))."""
     body = msg if key is None else as_map(field(msg, key, where), key)
     name = where if key is None else key
-    return vector3(body, "position", name), quaternion(body, "orientation", name)
+    return vector3_floats(body, "position", name), quaternion_floats(body, "orientation", name)
 
 
 def is_camera_info(msg: Any) -> bool:

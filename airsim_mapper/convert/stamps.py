@@ -9,6 +9,7 @@ import numpy as np
 from genpy import Time
 from std_msgs.msg import Header
 
+from airsim_mapper.convert import messages
 from airsim_mapper.convert.context import STAMP_ROS, ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 
@@ -24,7 +25,7 @@ def convert_stamp(time_stamp_ns: Any) -> Time:
     if ns < 0 or ns > MAX_STAMP_NS:
         raise ConversionError(f"time_stamp {ns} ns is outside the ROS1 time range [0, {MAX_STAMP_NS}]")
     secs, nsecs = divmod(ns, NS_PER_S)
-    return Time(secs, nsecs)
+    return messages.ros_time(secs, nsecs)
 
 
 def sim_stamp(msg: Mapping[str, Any]) -> Time:
@@ -44,4 +45,4 @@ def header(msg: Mapping[str, Any], ctx: ConvertContext) -> Header:
         stamp = ctx.now()
     else:
         stamp = sim_stamp(msg)
-    return Header(stamp=stamp, frame_id=ctx.frame_id)
+    return messages.header(stamp, ctx.frame_id)

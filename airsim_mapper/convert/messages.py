@@ -1,0 +1,52 @@
+"""The small ROS messages every pose carries, built by setting their fields directly.
+
+genpy's generated constructors take keyword arguments through a generic loop and first fill every field
+with a default object (a Header makes a Time, a Pose a Point and a Quaternion) that the caller then
+replaces. A pose message goes through six of them, on the receive thread, for every robot at 100 Hz.
+These builders set each field of a bare instance once; the result equals (and serialises exactly as)
+the one the constructors give, which tests/convert/test_messages.py checks field by field.
+"""
+
+from __future__ import annotations
+
+from genpy import Time
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
+from std_msgs.msg import Header
+
+_new = object.__new__
+
+
+def ros_time(secs: int, nsecs: int) -> Time:
+    """A genpy Time from an already canonical (secs, 0 <= nsecs < 1e9) pair."""
+    stamp = _new(Time)
+    stamp.secs = secs
+    stamp.nsecs = nsecs
+    return stamp
+
+
+def header(stamp: Time, frame_id: str) -> Header:
+    """std_msgs/Header with seq 0 (rospy numbers it when publishing)."""
+    out = _new(Header)
+    out.seq = 0
+    out.stamp = stamp
+    out.frame_id = frame_id
+    return out
+
+
+def pose(x: float, y: float, z: float, qw: float, qx: float, qy: float, qz: float) -> Pose:
+    """geometry_msgs/Pose of a position and a (w, x, y, z) quaternion."""
+    position = _new(Point)
+    position.x, position.y, position.z = x, y, z
+    orientation = _new(Quaternion)
+    orientation.x, orientation.y, orientation.z, orientation.w = qx, qy, qz, qw
+    out = _new(Pose)
+    out.position = position
+    out.orientation = orientation
+    return out
+
+
+def pose_stamped(head: Header, body: Pose) -> PoseStamped:
+    out = _new(PoseStamped)
+    out.header = head
+    out.pose = body
+    return out
