@@ -28,7 +28,7 @@ from airsim_mapper.engine.health import open_client
 from airsim_mapper.engine.reregister import MasterWatch
 from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
 from airsim_mapper.errors import AirsimMapperError
-from airsim_mapper.logs import caller_logger, ros_logger
+from airsim_mapper.logs import caller_logger, ros_logger, wait_for_rosout
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
@@ -97,6 +97,7 @@ class ProjectAirSimWrapper:
     ) -> None:
         keep_frame_buffers()  # process-wide, from the first frame the bridge receives (tuning.py)
         redirect_client_log()
+        wait_for_rosout()  # so that what the wrapper and its client log first reaches rosout.log (logs.py)
         self.shutdown_timeout = shutdown_timeout
         self.mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
         self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown

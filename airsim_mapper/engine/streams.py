@@ -106,7 +106,9 @@ class Stream:
             stamp = message.get("time_stamp") if type(message) is dict else None
             if type(stamp) is int and stamp > stats.newest_stamp:
                 stats.newest_stamp = stamp
-            inline = self.inline and self._running
+            if not self._running:
+                return  # stopped: nothing would take it
+            inline = self.inline
             if inline:
                 handlers = self.handlers
             else:
@@ -156,6 +158,7 @@ class Stream:
     def stop(self) -> None:
         with self._cond:
             self._running = False
+            self._pending, self._has_pending = None, False  # a message left waiting is dropped, not kept
             self._cond.notify()
             thread = self._thread
         if thread is not None and threading.current_thread() is not thread:

@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import threading
 import time
+import weakref
 
 from airsim_mapper.engine.streams import Stream
+
+
+class Message:
+    """A message that can be watched with a weak reference."""
 
 
 def wait_until(predicate, timeout: float = 5.0) -> None:
@@ -57,6 +62,27 @@ def test_a_message_that_waits_behind_a_busy_worker_shows_as_wait() -> None:
         stream.stop()
 
 
+def test_a_message_waiting_when_its_stream_stops_is_dropped_not_kept() -> None:
+    busy, release = threading.Event(), threading.Event()
+
+    def blocking(message) -> None:
+        if message == 1:
+            busy.set()
+            assert release.wait(5)
+
+    stream = Stream("/t", None, [blocking])
+    stream.offer(None, 1)
+    assert busy.wait(5)
+    waiting = Message()
+    gone = weakref.ref(waiting)
+    stream.offer(None, waiting)  # waits in the slot behind message 1
+    del waiting
+    threading.Timer(0.1, release.set).start()  # the worker finishes 1 while stop() waits for it
+    stream.stop()
+    assert stream.stats.handled == 1
+    assert gone() is None
+
+
 def stream_threads() -> list[str]:
     return [t.name for t in threading.enumerate() if t.name.startswith("stream:")]
 
@@ -79,8 +105,12 @@ def test_an_inline_stream_handles_each_message_on_the_offering_thread_with_no_wo
         assert (stream.stats.received, stream.stats.handled, stream.stats.dropped) == (3, 3, 0)
     finally:
         stream.stop()
-    stream.offer(None, 9)
+    late = Message()
+    gone = weakref.ref(late)
+    stream.offer(None, late)
+    del late
     assert len(seen) == 3  # stopped: nothing more is handled
+    assert gone() is None  # nor kept
 
 
 def test_a_failing_inline_handler_is_counted_and_the_others_still_run() -> None:

@@ -1,11 +1,12 @@
 """Debian's own ROS tools, run by the system interpreter outside the venv, read every message the bridge
 publishes once the message space `make setup` builds (devel/setup.bash) is sourced: radar included. The
-node's /rosout records, as rosout logs them, name their calling file, function and line."""
+node's /rosout records, as rosout logs them, name their calling file, function and line, and none of the
+node's or a mission script's first records is lost."""
 
 from __future__ import annotations
 
 import pytest
-from harness import DEVEL_SETUP, Rig, stock_tool
+from harness import DEVEL_SETUP, SIM_CONFIG, Rig, stock_tool
 
 pytestmark = pytest.mark.live
 
@@ -53,3 +54,33 @@ def test_the_stock_tools_read_radar_live_and_from_a_bag(launcher: Rig) -> None:
     )
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "tracks:" in replay.stdout and "radar1" in replay.stdout, replay.stdout
+
+
+MISSION = """
+import sys
+import rospy
+from airsim_mapper.wrapper import ProjectAirSimWrapper
+
+rospy.init_node("quick_mission")
+ProjectAirSimWrapper(topicsport=int(sys.argv[1]), servicesport=int(sys.argv[2]), sim_config_path=sys.argv[3],
+                     scene="scene_radar_tower.jsonc")
+rospy.spin()
+"""
+
+
+def test_a_mission_script_that_makes_the_wrapper_at_once_keeps_its_records_in_rosout_log(
+    launcher: Rig,
+) -> None:
+    launcher.roscore()
+    sim = launcher.simserver()
+    mission = launcher.python(
+        "mission", ["-c", MISSION, str(sim.topics_port), str(sim.services_port), str(SIM_CONFIG)]
+    )
+    launcher.wait_topics([f"{RADAR}/radar_detections"], mission)
+    launcher.stop(mission)
+    (rosout_log,) = [p for p in launcher.workdir.glob("ros_log/*/rosout.log") if p.parent.name != "latest"]
+    records = [line for line in rosout_log.read_text().splitlines() if " /quick_mission [" in line]
+    # /rosout latches only its last record: the wrapper waits for rosout before it (or the client it
+    # opens) logs, as the node does
+    assert any("Connecting to simulation server" in line for line in records), records[:5]
+    assert any("scene_radar_tower.jsonc) loaded:" in line for line in records), records[:5]
