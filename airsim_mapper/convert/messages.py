@@ -19,17 +19,14 @@ _new = object.__new__
 def ros_time(secs: int, nsecs: int) -> Time:
     """A genpy Time from an already canonical (secs, 0 <= nsecs < 1e9) pair."""
     stamp = _new(Time)
-    stamp.secs = secs
-    stamp.nsecs = nsecs
+    stamp.secs, stamp.nsecs = secs, nsecs
     return stamp
 
 
 def header(stamp: Time, frame_id: str) -> Header:
     """std_msgs/Header with seq 0 (rospy numbers it when publishing)."""
     out = _new(Header)
-    out.seq = 0
-    out.stamp = stamp
-    out.frame_id = frame_id
+    out.seq, out.stamp, out.frame_id = 0, stamp, frame_id
     return out
 
 
@@ -40,13 +37,12 @@ def pose(x: float, y: float, z: float, qw: float, qx: float, qy: float, qz: floa
     orientation = _new(Quaternion)
     orientation.x, orientation.y, orientation.z, orientation.w = qx, qy, qz, qw
     out = _new(Pose)
-    out.position = position
-    out.orientation = orientation
+    out.position, out.orientation = position, orientation
     return out
 
 
 def pose_stamped(head: Header, body: Pose) -> PoseStamped:
+    """geometry_msgs/PoseStamped of a header and a pose."""
     out = _new(PoseStamped)
-    out.header = head
-    out.pose = body
+    out.header, out.pose = head, body
     return out
