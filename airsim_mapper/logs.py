@@ -22,6 +22,7 @@ __all__ += ["wait_for_rosout"]
 
 SHOWN_NAME = 200  # characters of a user-given name (a scene file, say) a log line shows
 ROSOUT_WAIT_S = 2.0  # how long a node waits for the rosout node to connect before it logs on
+_ROSOUT_WAITED = threading.Event()  # one wait per process: the node's, or else its first wrapper's
 
 
 class CallerLogger(logging.Logger):
@@ -83,6 +84,7 @@ def wait_for_rosout(timeout: float = ROSOUT_WAIT_S, stopping: Callable[[], bool]
     moment after init_node, and a node that starts quickly has by then logged its settings and its bridge
     table, which never reached rosout.log or rqt_console. Returns False at once when nothing subscribes
     to /rosout (a master started with `--core`), when rospy is not logging to it, or on `stopping()`.
+    A process waits once: a later call only tells whether rosout is connected.
     """
     import rosgraph
     import rospy
@@ -91,6 +93,9 @@ def wait_for_rosout(timeout: float = ROSOUT_WAIT_S, stopping: Callable[[], bool]
     publisher = rosout._rosout_pub
     if publisher is None:
         return False
+    if _ROSOUT_WAITED.is_set():  # waited already (the node, before it made its wrapper)
+        return bool(publisher.get_num_connections())
+    _ROSOUT_WAITED.set()
     try:
         _publishers, subscribers, _services = rosgraph.Master(rospy.get_name()).getSystemState()
     except Exception:  # the master went away: the records go to the console and the log file only
