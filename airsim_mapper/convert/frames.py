@@ -14,6 +14,7 @@ Quaternion results are returned with w >= 0.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -54,8 +55,8 @@ def ned_to_enu(points: np.ndarray) -> np.ndarray:
     return np.asarray(points, dtype=float)[..., _SWAP] * _NED_ENU_SIGN
 
 
-def ned_to_enu_floats(point: Vec3) -> Vec3:
-    """`ned_to_enu` of one point given as floats (a pose message's position)."""
+def ned_to_enu_floats(point: Any) -> Vec3:
+    """`ned_to_enu` of one point given as three floats (a pose message's position, or a 3-vector)."""
     x, y, z = point
     return y, x, z * -1.0
 
@@ -80,7 +81,7 @@ def ned_frd_to_enu_flu(q_ned_frd: np.ndarray) -> np.ndarray:
     return canonical(quat_multiply(quat_multiply(Q_NED_TO_ENU, q_ned_frd), Q_FLU_TO_FRD))
 
 
-def ned_frd_to_enu_flu_floats(q_ned_frd: Quat) -> Quat:
+def ned_frd_to_enu_flu_floats(q_ned_frd: Any) -> Quat:
     """`ned_frd_to_enu_flu` of one (w, x, y, z) attitude given as floats: the same products, bit for bit."""
     w, x, y, z = q_mul(q_mul(_Q_NED_TO_ENU, q_ned_frd), _Q_FLU_TO_FRD)
     return (-w, -x, -y, -z) if w < 0.0 else (w, x, y, z)

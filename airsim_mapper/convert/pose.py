@@ -28,10 +28,7 @@ def ros_pose(position: Any, q_wxyz: Any) -> Pose:
 def world_pose(position: Any, q_ned_frd: Any, ctx: ConvertContext) -> Pose:
     """A world NED/FRD pose (arrays or float sequences) as a ROS Pose in the context's convention."""
     if ctx.enu:
-        return ros_pose(
-            frames.ned_to_enu_floats(tuple(map(float, position))),
-            frames.ned_frd_to_enu_flu_floats(tuple(map(float, q_ned_frd))),
-        )
+        return ros_pose(frames.ned_to_enu_floats(position), frames.ned_frd_to_enu_flu_floats(q_ned_frd))
     return ros_pose(position, q_ned_frd)
 
 

@@ -26,9 +26,9 @@ def serialized(msg: Any) -> bytes:
 
 
 def every_slot_set(msg: Any) -> None:
-    for name in msg.__slots__:
+    for name in msg.__slots__:  # a generated class's fields (and a Time's secs and nsecs)
         value = getattr(msg, name)  # AttributeError if a builder left it out
-        if hasattr(value, "__slots__") and name != "_connection_header":
+        if hasattr(value, "__slots__"):
             every_slot_set(value)
 
 
@@ -45,9 +45,7 @@ def test_a_built_pose_stamped_equals_and_serialises_as_the_constructed_one(
     )
     assert built == constructed
     assert serialized(built) == serialized(constructed)
-    every_slot_set(built.header)
-    every_slot_set(built.pose)
-    assert [n for n in built.__slots__ if n != "_connection_header"] == ["header", "pose"]
+    every_slot_set(built)
 
 
 @given(finite, finite, finite)
