@@ -190,16 +190,23 @@ class ConnectionPoll(rospy.topics.Poller):
 
     def __init__(self) -> None:
         self.poller = select.poll()
+        # rospy polls from its registration thread (`check`, unlocked) and under the topic's lock when a
+        # connection is added; epoll allows that, but a poll object raises on a concurrent poll().
+        self._lock = threading.Lock()
 
     def add_fd(self, fd: int) -> None:
-        self.poller.register(fd, self._WATCH)
+        with self._lock:
+            self.poller.register(fd, self._WATCH)
 
     def remove_fd(self, fd: int) -> None:
-        self.poller.unregister(fd)
+        with self._lock:
+            self.poller.unregister(fd)
 
     def error_iter(self) -> Iterator[int]:
         """The watched descriptors whose connection has ended."""
-        return (fd for fd, event in self.poller.poll(0) if event & self._GONE)
+        with self._lock:
+            events = self.poller.poll(0)
+        return (fd for fd, event in events if event & self._GONE)
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:

@@ -75,3 +75,28 @@ def test_rospy_drops_the_gone_connection_before_it_connects_the_new_publisher(to
         far.close()  # the publisher unregistered; the same node registers it again at once
         topic.check()
         assert not topic.has_connection(uri)
+
+
+def test_threads_may_poll_at_once_as_rospy_does():
+    """rospy polls from its registration thread and, under the topic's lock, when a connection is added."""
+    import threading
+
+    errors: list[BaseException] = []
+    with tcp_pair() as (near, far):
+        poll = ConnectionPoll()
+        poll.add_fd(near.fileno())
+        far.close()
+
+        def hammer() -> None:
+            try:
+                for _ in range(20000):
+                    assert list(poll.error_iter()) == [near.fileno()]
+            except BaseException as exc:  # a concurrent poll() raised
+                errors.append(exc)
+
+        threads = [threading.Thread(target=hammer) for _ in range(4)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+    assert errors == []
