@@ -22,7 +22,13 @@ from sensor_msgs.msg import CompressedImage
 from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
-from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size, serialize_buffer_last
+from airsim_mapper.convert.image import (
+    MAX_PIXELS,
+    pixel_bytes,
+    png_size,
+    serialize_buffer_last,
+    serialize_head,
+)
 from airsim_mapper.convert.stamps import header
 
 FORMAT = "bgr8; png compressed bgr8"  # compressed_image_transport's "<encoding>; png compressed <target>"
@@ -38,6 +44,9 @@ class BufferCompressedImage(CompressedImage):
 
     def serialize(self, buff: Any) -> None:
         serialize_buffer_last(self, CompressedImage, buff)
+
+    def serialize_head(self, buff: Any) -> memoryview:
+        return serialize_head(self, CompressedImage, buff)
 
 
 @sim_fields.converter("compressed_image")

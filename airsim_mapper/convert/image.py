@@ -61,7 +61,8 @@ class BufferImage(Image):
 
     genpy packs ``uint8[]`` with `struct`, which takes only bytes and copies them once more on the way into
     the buffer. This writes the pixels as they are: every other field through genpy, then the pixels'
-    length and the buffer itself.
+    length and the buffer itself; or, for a publisher that sends the pixels from where they are, all but
+    the pixels (`serialize_head`).
     """
 
     __slots__ = Image.__slots__  # genpy validates keyword fields against the class's own __slots__
@@ -70,19 +71,29 @@ class BufferImage(Image):
     def serialize(self, buff: Any) -> None:
         serialize_buffer_last(self, Image, buff)
 
+    def serialize_head(self, buff: Any) -> memoryview:
+        return serialize_head(self, Image, buff)
 
-def serialize_buffer_last(message: Any, base: type, buff: Any) -> None:
-    """Serialize `message`, a `base` genpy message whose last field ``data`` is a uint8[] held as any byte
-    buffer: every other field through genpy (``data`` as an empty array: a zero length, last), then the
-    buffer's length and the buffer itself."""
+
+def serialize_head(message: Any, base: type, buff: Any) -> memoryview:
+    """Serialize all of `message`, a `base` genpy message whose last field ``data`` is a uint8[] held as
+    any byte buffer, but that buffer's bytes: every other field through genpy (``data`` as an empty array,
+    a zero length, last), the length put right. Returns the bytes, a flat view: written next, they
+    complete the message. A publisher can send them from where they are (`engine.publish`)."""
     data, message.data = message.data, b""
     try:
         base.serialize(message, buff)
     finally:
         message.data = data
+    tail = memoryview(data).cast("B")
     buff.seek(buff.tell() - 4)
-    buff.write(struct.pack("<I", memoryview(data).nbytes))
-    buff.write(data)
+    buff.write(struct.pack("<I", tail.nbytes))
+    return tail
+
+
+def serialize_buffer_last(message: Any, base: type, buff: Any) -> None:
+    """Serialize `message` as `serialize_head` does, then its buffer's bytes."""
+    buff.write(serialize_head(message, base, buff))
 
 
 def as_bytes_view(array: np.ndarray) -> memoryview:

@@ -24,6 +24,7 @@ from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.pose import camera_pose_key
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
+from airsim_mapper.engine.publish import publish
 from airsim_mapper.engine.replays import LatchedReplays
 from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
@@ -210,7 +211,7 @@ class SimToRos(Bridge):
         publisher = self.publisher
         if publisher is not None:
             try:
-                publisher.publish(out)
+                publish(publisher, out)
             except ClosedEndpoint:  # unregistered by a concurrent stop
                 return None
         self.stats.messages += 1

@@ -38,7 +38,8 @@ class PromptQueuedConnection(QueuedConnection):
     takes part of it, the rest becomes `_partial`, which the writer thread sends before anything else and
     the queue limit never drops (a message cut short would corrupt the stream). If it takes nothing, or
     anything is already waiting, the message is queued as in rospy. A slow subscriber therefore still
-    never blocks the publisher, and the queue's drop-oldest limit still applies.
+    never blocks the publisher, and the queue's drop-oldest limit still applies. `write_parts` does the
+    same for a message in two parts (`engine.publish`: a head, and an image's pixels where they are).
 
     rospy has the transport call a method of the connection when it closes, and the connection holds the
     transport: a reference cycle, so every connection a stopped publisher had (its topic, its transport,
@@ -54,33 +55,43 @@ class PromptQueuedConnection(QueuedConnection):
         connection.set_cleanup_callback(WakeOnClose(self._cond_data_available))
 
     def write_data(self, data: bytes) -> bool:
+        return self._write((data,), len(data))
+
+    def write_parts(self, head: bytes, tail: memoryview) -> bool:
+        """`write_data` for a message in two parts, the second sent from where it is (`engine.publish`):
+        copied into one only when it must wait in the queue."""
+        return self._write((head, tail), len(head) + tail.nbytes)
+
+    def _write(self, parts: tuple[bytes | memoryview, ...], total: int) -> bool:
         with self._lock:
             if self._error:
                 error, self._error = self._error, None
                 raise error
             if not self._queue and not self._busy and self._partial is None:
-                sent = self._send_now(data)
+                sent = self._send_now(parts)
                 if sent:
                     self._connection.stat_bytes += sent
-                    if sent == len(data):
+                    if sent == total:
                         self._connection.stat_num_msg += 1
                     else:  # the writer thread sends the rest (and counts the message)
-                        self._partial = memoryview(data)[sent:]
+                        self._partial = unsent(parts, sent)
                         self._cond_data_available.notify()
                     return True
             if self._queue_size > 0 and len(self._queue) == self._queue_size:
                 del self._queue[0]
-            self._queue.append(data)
+            self._queue.append(parts[0] if len(parts) == 1 else b"".join(parts))
             self._cond_data_available.notify()
         return True
 
-    def _send_now(self, data: bytes) -> int:
-        """Bytes of `data` the socket took without blocking; 0 leaves it all to the writer thread."""
+    def _send_now(self, parts: tuple[bytes | memoryview, ...]) -> int:
+        """Bytes of `parts` the socket took without blocking; 0 leaves them all to the writer thread."""
         sock = getattr(self._connection, "socket", None)
         if sock is None or self._connection.done or sock.gettimeout() is not None:
             return 0  # no socket yet, closing, or a socket with a timeout (send would poll first)
         try:
-            return sock.send(data, socket.MSG_DONTWAIT)
+            if len(parts) == 1:
+                return sock.send(parts[0], socket.MSG_DONTWAIT)
+            return sock.sendmsg(parts, (), socket.MSG_DONTWAIT)
         except OSError:  # full (EAGAIN) or broken: the writer thread's sendall meets and reports errors
             return 0
 
@@ -103,6 +114,18 @@ class PromptQueuedConnection(QueuedConnection):
             finally:
                 with self._lock:
                     self._busy = False
+
+
+def unsent(parts: tuple[bytes | memoryview, ...], sent: int) -> memoryview:
+    """What is left of `parts` after their first `sent` bytes, as one buffer: a view of the part it starts
+    in when that is the last, else a copy."""
+    for index, part in enumerate(parts):
+        view = memoryview(part)
+        if sent < view.nbytes:
+            later = parts[index + 1 :]
+            return view[sent:] if not later else memoryview(b"".join((view[sent:], *later)))
+        sent -= view.nbytes
+    return memoryview(b"")
 
 
 class WakeOnClose:

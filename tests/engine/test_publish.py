@@ -1,0 +1,239 @@
+"""engine.publish: an image handed over in parts is, on the wire, what rospy's publish sends, whether the
+socket takes it at once, in part, or only after others queued before it."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from typing import Any
+
+import pytest
+import rospy.topics
+from rospy.impl.tcpros_base import TCPROSTransport
+from rospy.impl.tcpros_pubsub import QueuedConnection, TCPROSPub
+from sensor_msgs.msg import CompressedImage, Image
+
+from airsim_mapper.convert.compressed_image import BufferCompressedImage
+from airsim_mapper.convert.image import BufferImage
+from airsim_mapper.engine.publish import publish
+from airsim_mapper.engine.realtime import PromptQueuedConnection, unsent
+
+TOPIC = "/test_publish/image"
+QUEUE = 2
+
+
+class Publisher:
+    """rospy.Publisher's publish over a real `_PublisherImpl` (a `rospy.Publisher` needs a master)."""
+
+    def __init__(self, data_class: type = Image) -> None:
+        self.impl = rospy.topics._PublisherImpl(TOPIC, data_class)
+
+    def publish(self, message: Any) -> None:
+        self.impl.acquire()
+        try:
+            self.impl.publish(message)
+        finally:
+            self.impl.release()
+
+
+def connect(impl: Any, kind: type = PromptQueuedConnection) -> tuple[Any, socket.socket]:
+    """A subscriber's connection on `impl` as the node makes it (a queued connection around a TCPROS
+    transport); returns it and the subscriber's end of the socket."""
+    ours, theirs = tcp_pair()
+    transport = TCPROSTransport(TCPROSPub(TOPIC, impl.data_class), TOPIC)
+    transport.set_socket(ours, "test")
+    connection = kind(transport, QUEUE)
+    impl.add_connection(connection)
+    return connection, theirs
+
+
+def tcp_pair() -> tuple[socket.socket, socket.socket]:
+    """Two ends of a loopback TCP connection, as between a publisher and its subscriber; the subscriber's
+    receive buffer small, so that a large message cannot be taken at once."""
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        theirs = socket.socket()
+        theirs.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 65536)
+        theirs.connect(server.getsockname())
+        ours, _ = server.accept()
+    ours.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 65536)
+    return ours, theirs
+
+
+def read(sock: socket.socket, size: int, timeout: float = 10.0) -> bytes:
+    sock.settimeout(timeout)
+    chunks, left = [], size
+    while left:
+        chunk = sock.recv(left)
+        assert chunk, "the connection closed early"
+        chunks.append(chunk)
+        left -= len(chunk)
+    return b"".join(chunks)
+
+
+def image(pixels: bytes | memoryview, width: int = 4, height: int = 2) -> BufferImage:
+    out = BufferImage(height=height, width=width, encoding="bgr8", step=width * 3, data=memoryview(pixels))
+    out.header.frame_id = "Drone1/Cam_optical"
+    out.header.stamp.secs, out.header.stamp.nsecs = 12, 345
+    return out
+
+
+def sent_by_both(data_class: type, make: Any, times: int) -> tuple[bytes, bytes]:
+    """What a subscriber reads of `times` messages from `make`, published through engine.publish and
+    through rospy's own publish."""
+    ours, rospys = Publisher(data_class), Publisher(data_class)
+    (_, our_end), (_, their_end) = connect(ours.impl), connect(rospys.impl)
+    try:
+        for _ in range(times):
+            publish(ours, make())
+            rospys.publish(make())
+        size = ours.impl.message_data_sent
+        assert size == rospys.impl.message_data_sent
+        return read(our_end, size), read(their_end, size)
+    finally:
+        ours.impl.close()
+        rospys.impl.close()
+
+
+def test_the_bytes_on_the_wire_are_rospys() -> None:
+    pixels = bytes(range(24))
+    ours, rospys = sent_by_both(Image, lambda: image(pixels), times=3)
+    assert ours == rospys
+    assert pixels in ours
+
+
+def test_a_compressed_image_too() -> None:
+    def make() -> BufferCompressedImage:
+        out = BufferCompressedImage(format="bgr8; png compressed bgr8", data=memoryview(b"\x89PNG-bytes"))
+        out.header.frame_id = "cam"
+        return out
+
+    ours, rospys = sent_by_both(CompressedImage, make, times=2)
+    assert ours == rospys
+
+
+def test_sequence_numbers_and_statistics_are_kept() -> None:
+    publisher = Publisher()
+    connection, end = connect(publisher.impl)
+    messages = [image(bytes(24)) for _ in range(3)]
+    for message in messages:
+        publish(publisher, message)
+    assert [m.header.seq for m in messages] == [1, 2, 3]
+    assert publisher.impl.seq == 3
+    assert len(read(end, publisher.impl.message_data_sent)) == connection.stat_bytes
+    assert connection.stat_num_msg == 3
+    publisher.impl.close()
+
+
+class Recording(PromptQueuedConnection):
+    """The node's connection, noting the pixels it is handed."""
+
+    def __init__(self, connection: Any, queue_size: int) -> None:
+        self.tails: list[memoryview] = []
+        super().__init__(connection, queue_size)
+
+    def write_parts(self, head: bytes, tail: memoryview) -> bool:
+        self.tails.append(tail)
+        return super().write_parts(head, tail)
+
+
+def test_the_pixels_are_handed_over_where_they_are() -> None:
+    publisher = Publisher()
+    connection, end = connect(publisher.impl, Recording)
+    pixels = bytes(range(24))
+    publish(publisher, image(pixels))
+    assert [tail.obj for tail in connection.tails] == [pixels]
+    assert read(end, publisher.impl.message_data_sent).endswith(pixels)
+    publisher.impl.close()
+
+
+def frame_pixels(n: int) -> bytes:
+    return bytes([n]) * (1920 * 1080 * 3)
+
+
+def test_images_the_socket_takes_in_part_or_queues_arrive_whole_and_in_order() -> None:
+    """A small send buffer and a subscriber that reads late: the first image is taken in part (its rest
+    goes to the writer thread as a view), the next ones wait in the queue."""
+    publisher, reference = Publisher(), Publisher()
+    connection, end = connect(publisher.impl)
+    _, reference_end = connect(reference.impl)
+    for n in (1, 2):
+        publish(publisher, image(frame_pixels(n), 1920, 1080))
+        reference.publish(image(frame_pixels(n), 1920, 1080))
+    assert connection.stat_num_msg < 2  # the socket could not take both at once
+    size = reference.impl.message_data_sent
+    assert read(end, size) == read(reference_end, size)
+    for item in (publisher, reference):
+        item.impl.close()
+
+
+def test_a_queue_full_of_images_drops_the_oldest_whole() -> None:
+    publisher = Publisher()
+    _, end = connect(publisher.impl)
+    for n in range(1, 7):
+        publish(publisher, image(frame_pixels(n), 1920, 1080))
+    pixels: list[int] = []
+    while not pixels or pixels[-1] != 6:
+        length = int.from_bytes(read(end, 4), "little")
+        pixels.append(read(end, length)[-1])
+    assert pixels == sorted(pixels) and pixels[0] == 1  # in order, none cut: the first, then the newest
+    assert len(pixels) < 6
+    publisher.impl.close()
+
+
+def test_a_broken_connection_is_closed_and_the_others_still_receive() -> None:
+    publisher = Publisher()
+    broken, broken_end = connect(publisher.impl)
+    _, good_end = connect(publisher.impl)
+    broken_end.close()
+    deadline = time.monotonic() + 10
+    while not broken.done and time.monotonic() < deadline:
+        publish(publisher, image(bytes(24)))
+        time.sleep(0.01)  # the writer thread meets the error; the next publish closes the connection
+    assert broken.done
+    assert len(read(good_end, publisher.impl.message_data_sent)) == publisher.impl.message_data_sent
+    publisher.impl.close()
+
+
+@pytest.mark.parametrize("case", ["plain message", "latched", "no subscriber", "rospy's connection"])
+def test_anything_else_goes_through_rospys_publish(case: str) -> None:
+    calls: list[Any] = []
+    publisher = Publisher()
+    publisher.publish = calls.append  # type: ignore[method-assign]
+    message: Any = Image() if case == "plain message" else image(bytes(24))
+    publisher.impl.is_latch = case == "latched"
+    if case != "no subscriber":
+        connect(publisher.impl, QueuedConnection if case == "rospy's connection" else PromptQueuedConnection)
+    publish(publisher, message)
+    assert calls == [message]
+    publisher.impl.close()
+
+
+def test_unsent_is_a_view_of_the_last_part_and_a_copy_across_parts() -> None:
+    head, tail = b"head", memoryview(b"pixels")
+    assert bytes(unsent((head, tail), 2)) == b"adpixels"
+    rest = unsent((head, tail), 6)
+    assert bytes(rest) == b"xels" and rest.obj is tail.obj
+    assert bytes(unsent((b"data",), 1)) == b"ata"
+    assert bytes(unsent((head, tail), 10)) == b""
+
+
+def test_threads_may_publish_at_once() -> None:
+    publisher = Publisher()
+    _, end = connect(publisher.impl)
+    threads = [
+        threading.Thread(target=lambda: [publish(publisher, image(bytes(24))) for _ in range(50)])
+        for _ in range(4)
+    ]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    data = read(end, publisher.impl.message_data_sent)
+    seqs, offset = [], 0
+    while offset < len(data):
+        length = int.from_bytes(data[offset : offset + 4], "little")
+        seqs.append(int.from_bytes(data[offset + 4 : offset + 8], "little"))
+        offset += 4 + length
+    assert seqs == list(range(1, 201))
+    publisher.impl.close()
