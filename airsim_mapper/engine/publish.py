@@ -16,9 +16,12 @@ from __future__ import annotations
 import contextlib
 import io
 import struct
+from collections.abc import Callable
 from typing import Any
 
+import genpy
 from rospy.core import is_shutdown
+from rospy.exceptions import ROSSerializationException
 
 from airsim_mapper.logs import ros_logger
 
@@ -30,25 +33,21 @@ def publish(publisher: Any, message: Any) -> None:
     """`publisher.publish(message)`, handing the message's buffer over without a copy when it can."""
     serialize_head = getattr(message, "serialize_head", None)
     impl = getattr(publisher, "impl", None) if serialize_head is not None else None
-    if impl is None or impl.closed or impl.is_latch:
-        publisher.publish(message)
-        return
-    connections = impl.connections
-    if not connections or not all(hasattr(c, "write_parts") for c in connections):
+    lock = getattr(impl, "publock", None)  # None once the topic is closed
+    if lock is None:
         publisher.publish(message)
         return
     failed = []
-    impl.acquire()
-    try:
+    with lock:  # rospy's publish lock, re-entrant: rospy's own publish may run inside it
+        connections = impl.connections
+        if not in_parts(impl, connections):
+            publisher.publish(message)
+            return
         impl.seq += 1
-        message.header.seq = impl.seq
-        buff = io.BytesIO()
-        buff.seek(LENGTH.size)
-        tail = serialize_head(buff)
-        end = buff.tell()
-        buff.seek(0)
-        buff.write(LENGTH.pack(end - LENGTH.size + tail.nbytes))
-        head = buff.getvalue()
+        try:
+            head, tail = serialized(message, serialize_head, impl.seq)
+        except genpy.SerializationError as exc:  # as rospy's publish reports it
+            raise ROSSerializationException(str(exc)) from exc
         for connection in connections:
             if is_shutdown():
                 break
@@ -58,8 +57,33 @@ def publish(publisher: Any, message: Any) -> None:
                 log.debug("closing the connection to %s: %s", connection.endpoint_id, exc)
                 failed.append(connection)
         impl.message_data_sent += len(head) + tail.nbytes
-    finally:
-        impl.release()
     for connection in failed:
         with contextlib.suppress(Exception):
             connection.close()
+
+
+def in_parts(impl: Any, connections: list[Any]) -> bool:
+    """Whether rospy's publish would send to `connections` now (an open topic, not latched, with
+    subscribers), and every one of them takes a message in parts."""
+    if impl.closed or impl.is_latch or not connections:
+        return False
+    return all(hasattr(connection, "write_parts") for connection in connections)
+
+
+def serialized(
+    message: Any, serialize_head: Callable[[Any], memoryview], seq: int
+) -> tuple[bytes, memoryview]:
+    """rospy's `serialize_message` for a message whose buffer is sent apart: the length-prefixed head
+    (the header's seq set, a None frame_id made "0"), and the buffer."""
+    if getattr(type(message), "_has_header", False):
+        header = message.header
+        header.seq = seq
+        if header.frame_id is None:
+            header.frame_id = "0"
+    buff = io.BytesIO()
+    buff.seek(LENGTH.size)
+    tail = serialize_head(buff)
+    end = buff.tell()
+    buff.seek(0)
+    buff.write(LENGTH.pack(end - LENGTH.size + tail.nbytes))
+    return buff.getvalue(), tail

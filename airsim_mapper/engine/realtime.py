@@ -101,19 +101,23 @@ class PromptQueuedConnection(QueuedConnection):
             with self._lock:
                 while not self._queue and self._partial is None and not connection.done:
                     self._cond_data_available.wait()
-                partial, self._partial = self._partial, None
-                queue, self._queue = self._queue, []
+                batch = ([self._partial] if self._partial is not None else []) + self._queue
+                self._partial, self._queue = None, []
                 self._busy = True
             try:
-                for data in ([partial] if partial is not None else []) + queue:
-                    try:
-                        connection.write_data(data)  # rospy's blocking sendall, its error handling
-                    except Exception as exc:
-                        with self._lock:
-                            self._error = exc
+                self._send(batch)
             finally:
+                batch = []  # a sent frame (the rest of one is a view of it) is not kept until the next
                 with self._lock:
                     self._busy = False
+
+    def _send(self, batch: list[bytes | memoryview]) -> None:
+        for data in batch:
+            try:
+                self._connection.write_data(data)  # rospy's blocking sendall, its error handling
+            except Exception as exc:
+                with self._lock:
+                    self._error = exc
 
 
 def unsent(parts: tuple[bytes | memoryview, ...], sent: int) -> memoryview:

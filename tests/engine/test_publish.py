@@ -3,13 +3,17 @@ socket takes it at once, in part, or only after others queued before it."""
 
 from __future__ import annotations
 
+import gc
 import socket
 import threading
 import time
+import weakref
 from typing import Any
 
+import numpy as np
 import pytest
 import rospy.topics
+from rospy.exceptions import ROSException, ROSSerializationException
 from rospy.impl.tcpros_base import TCPROSTransport
 from rospy.impl.tcpros_pubsub import QueuedConnection, TCPROSPub
 from sensor_msgs.msg import CompressedImage, Image
@@ -56,6 +60,7 @@ def tcp_pair() -> tuple[socket.socket, socket.socket]:
         theirs.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 65536)
         theirs.connect(server.getsockname())
         ours, _ = server.accept()
+    ours.setblocking(True)  # as rospy's handshake leaves it, whatever socket.setdefaulttimeout says
     ours.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 65536)
     return ours, theirs
 
@@ -110,6 +115,34 @@ def test_a_compressed_image_too() -> None:
 
     ours, rospys = sent_by_both(CompressedImage, make, times=2)
     assert ours == rospys
+
+
+def test_a_frame_id_of_none_is_sent_as_rospy_sends_it() -> None:
+    def make() -> BufferImage:
+        out = image(bytes(24))
+        out.header.frame_id = None
+        return out
+
+    ours, rospys = sent_by_both(Image, make, times=1)
+    assert ours == rospys
+
+
+def test_a_field_that_cannot_be_serialised_raises_as_in_rospy() -> None:
+    publisher = Publisher()
+    connect(publisher.impl)
+    bad = image(bytes(24))
+    bad.height = "two"
+    with pytest.raises(ROSSerializationException):
+        publish(publisher, bad)
+    publisher.impl.close()
+
+
+def test_a_closed_topic_raises_as_in_rospy() -> None:
+    publisher = Publisher()
+    connect(publisher.impl)
+    publisher.impl.close()
+    with pytest.raises(ROSException):
+        publish(publisher, image(bytes(24)))
 
 
 def test_sequence_numbers_and_statistics_are_kept() -> None:
@@ -181,6 +214,24 @@ def test_a_queue_full_of_images_drops_the_oldest_whole() -> None:
     publisher.impl.close()
 
 
+def test_a_frame_taken_in_part_lives_until_its_rest_is_sent_and_no_longer() -> None:
+    publisher = Publisher()
+    connection, end = connect(publisher.impl)
+    pixels = np.full(1920 * 1080 * 3, 7, dtype=np.uint8)  # the received frame
+    alive = weakref.ref(pixels)
+    publish(publisher, image(pixels, 1920, 1080))
+    del pixels
+    gc.collect()
+    assert alive() is not None  # the writer thread holds the rest, a view of it
+    assert read(end, publisher.impl.message_data_sent).endswith(bytes([7]) * 1000)
+    deadline = time.monotonic() + 10
+    while (alive() is not None or connection.stat_num_msg < 1) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert connection.stat_num_msg == 1
+    assert alive() is None  # not kept until the next message
+    publisher.impl.close()
+
+
 def test_a_broken_connection_is_closed_and_the_others_still_receive() -> None:
     publisher = Publisher()
     broken, broken_end = connect(publisher.impl)
@@ -195,7 +246,9 @@ def test_a_broken_connection_is_closed_and_the_others_still_receive() -> None:
     publisher.impl.close()
 
 
-@pytest.mark.parametrize("case", ["plain message", "latched", "no subscriber", "rospy's connection"])
+@pytest.mark.parametrize(
+    "case", ["plain message", "latched", "no subscriber", "rospy's connection", "one of rospy's connections"]
+)
 def test_anything_else_goes_through_rospys_publish(case: str) -> None:
     calls: list[Any] = []
     publisher = Publisher()
@@ -204,6 +257,8 @@ def test_anything_else_goes_through_rospys_publish(case: str) -> None:
     publisher.impl.is_latch = case == "latched"
     if case != "no subscriber":
         connect(publisher.impl, QueuedConnection if case == "rospy's connection" else PromptQueuedConnection)
+    if case == "one of rospy's connections":
+        connect(publisher.impl, QueuedConnection)
     publish(publisher, message)
     assert calls == [message]
     publisher.impl.close()
