@@ -20,15 +20,10 @@ from typing import Any
 from sensor_msgs.msg import CompressedImage
 
 from airsim_mapper.convert import sim_fields
+from airsim_mapper.convert.buffer_data import serialize_buffer_last, serialize_head
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
-from airsim_mapper.convert.image import (
-    MAX_PIXELS,
-    pixel_bytes,
-    png_size,
-    serialize_buffer_last,
-    serialize_head,
-)
+from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size
 from airsim_mapper.convert.stamps import header
 
 FORMAT = "bgr8; png compressed bgr8"  # compressed_image_transport's "<encoding>; png compressed <target>"

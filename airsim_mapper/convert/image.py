@@ -29,6 +29,7 @@ import numpy as np
 from sensor_msgs.msg import Image
 
 from airsim_mapper.convert import sim_fields
+from airsim_mapper.convert.buffer_data import serialize_buffer_last, serialize_head
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.stamps import header
@@ -73,27 +74,6 @@ class BufferImage(Image):
 
     def serialize_head(self, buff: Any) -> memoryview:
         return serialize_head(self, Image, buff)
-
-
-def serialize_head(message: Any, base: type, buff: Any) -> memoryview:
-    """Serialize all of `message`, a `base` genpy message whose last field ``data`` is a uint8[] held as
-    any byte buffer, but that buffer's bytes: every other field through genpy (``data`` as an empty array,
-    a zero length, last), the length put right. Returns the bytes, a flat view: written next, they
-    complete the message. A publisher can send them from where they are (`engine.publish`)."""
-    data, message.data = message.data, b""
-    try:
-        base.serialize(message, buff)
-    finally:
-        message.data = data
-    tail = memoryview(data).cast("B")
-    buff.seek(buff.tell() - 4)
-    buff.write(struct.pack("<I", tail.nbytes))
-    return tail
-
-
-def serialize_buffer_last(message: Any, base: type, buff: Any) -> None:
-    """Serialize `message` as `serialize_head` does, then its buffer's bytes."""
-    buff.write(serialize_head(message, base, buff))
 
 
 def as_bytes_view(array: np.ndarray) -> memoryview:
