@@ -1,9 +1,11 @@
 """Messages whose ``data`` byte array is held as any byte buffer, and serialised without copying it.
 
 genpy packs a ``uint8[]`` with `struct`, which takes only bytes and copies them once more on the way into
-the buffer. The converters' Buffer* messages (`image.BufferImage`, `compressed_image.BufferCompressedImage`)
-keep ``data`` as a view of the received frame or of the converted array, and serialise it as it is; a
-publisher can send it from where it is (`engine.publish`).
+the buffer. The converters' Buffer* messages (`image.BufferImage`, `compressed_image.BufferCompressedImage`,
+`pointcloud.BufferPointCloud2`) keep ``data`` as a view of the received frame or of the converted array.
+`serialize_apart` writes every field through genpy but ``data``'s bytes, and returns those bytes with the
+serialised fields after them: written next, in order, they complete the message. So `serialize` writes
+the bytes once, and a publisher can send them from where they are (`engine.publish`).
 """
 
 from __future__ import annotations
@@ -11,23 +13,46 @@ from __future__ import annotations
 import struct
 from typing import Any
 
+Part = bytes | memoryview  # a flat byte buffer, one part of a serialised message
+LENGTH = struct.Struct("<I")  # the length before a uint8[]'s bytes
 
-def serialize_head(message: Any, base: type, buff: Any) -> memoryview:
-    """Serialize all of `message`, a `base` genpy message whose last field ``data`` is a uint8[] held as
-    any byte buffer, but that buffer's bytes: every other field through genpy (``data`` as an empty array,
-    a zero length, last), the length put right. Returns the bytes, a flat view: written next, they
-    complete the message. A publisher can send them from where they are (`engine.publish`)."""
+
+class BufferData:
+    """Mixin of a genpy message class whose ``data`` (uint8[]) may be any byte buffer.
+
+    `_genpy_class` is the genpy class; `_after_data` the size of its fixed-size fields after ``data`` (0 when
+    ``data`` is the last field). Same type, md5sum and bytes on the wire as the genpy class.
+    """
+
+    __slots__ = ()
+    _genpy_class: type
+    _after_data = 0
+
+    def serialize(self, buff: Any) -> None:
+        for part in self.serialize_apart(buff):
+            buff.write(part)
+
+    def serialize_apart(self, buff: Any) -> tuple[Part, ...]:
+        return serialize_apart(self, self._genpy_class, buff, self._after_data)
+
+
+def serialize_apart(message: Any, base: type, buff: Any, after: int = 0) -> tuple[Part, ...]:
+    """Serialize `message`, a `base` genpy message whose ``data`` is a uint8[] held as any byte buffer,
+    up to ``data``'s bytes (every field before them through genpy, then their length). Returns what
+    completes the message: those bytes as a flat view, then the `after` bytes of the fields after them
+    when there are any."""
     data, message.data = message.data, b""
     try:
-        base.serialize(message, buff)
+        base.serialize(message, buff)  # data as an empty array: a zero length, then the fields after it
     finally:
         message.data = data
-    tail = memoryview(data).cast("B")
-    buff.seek(buff.tell() - 4)
-    buff.write(struct.pack("<I", tail.nbytes))
-    return tail
-
-
-def serialize_buffer_last(message: Any, base: type, buff: Any) -> None:
-    """Serialize `message` as `serialize_head` does, then its buffer's bytes."""
-    buff.write(serialize_head(message, base, buff))
+    view = memoryview(data).cast("B")
+    end = buff.tell()
+    buff.seek(end - after)
+    rest = buff.read(after)
+    buff.seek(end - after - LENGTH.size)
+    buff.write(LENGTH.pack(view.nbytes))
+    if not after:
+        return (view,)
+    buff.truncate()
+    return view, rest

@@ -20,7 +20,7 @@ from typing import Any
 from sensor_msgs.msg import CompressedImage
 
 from airsim_mapper.convert import sim_fields
-from airsim_mapper.convert.buffer_data import serialize_buffer_last, serialize_head
+from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size
@@ -30,18 +30,12 @@ FORMAT = "bgr8; png compressed bgr8"  # compressed_image_transport's "<encoding>
 COMPRESSED = "PNG"  # the simulator's encoding of a compressed colour image
 
 
-class BufferCompressedImage(CompressedImage):
-    """sensor_msgs/CompressedImage (same type, md5sum and bytes on the wire) whose ``data`` may be any byte
-    buffer, written as it is (genpy would copy it through `struct` first); ``data`` is the last field."""
+class BufferCompressedImage(BufferData, CompressedImage):
+    """sensor_msgs/CompressedImage whose ``data`` may be any byte buffer (`buffer_data`)."""
 
     __slots__ = CompressedImage.__slots__
     _slot_types = CompressedImage._slot_types
-
-    def serialize(self, buff: Any) -> None:
-        serialize_buffer_last(self, CompressedImage, buff)
-
-    def serialize_head(self, buff: Any) -> memoryview:
-        return serialize_head(self, CompressedImage, buff)
+    _genpy_class = CompressedImage
 
 
 @sim_fields.converter("compressed_image")

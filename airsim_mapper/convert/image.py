@@ -29,7 +29,7 @@ import numpy as np
 from sensor_msgs.msg import Image
 
 from airsim_mapper.convert import sim_fields
-from airsim_mapper.convert.buffer_data import serialize_buffer_last, serialize_head
+from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.stamps import header
@@ -57,23 +57,13 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PNG_IHDR = struct.Struct(">I4sII")  # the first chunk: length, b"IHDR", width, height
 
 
-class BufferImage(Image):
-    """sensor_msgs/Image (same type, md5sum and bytes on the wire) whose ``data`` may be any byte buffer.
-
-    genpy packs ``uint8[]`` with `struct`, which takes only bytes and copies them once more on the way into
-    the buffer. This writes the pixels as they are: every other field through genpy, then the pixels'
-    length and the buffer itself; or, for a publisher that sends the pixels from where they are, all but
-    the pixels (`serialize_head`).
-    """
+class BufferImage(BufferData, Image):
+    """sensor_msgs/Image whose ``data`` may be any byte buffer (`buffer_data`): the pixels are written as
+    they are, or sent from where they are."""
 
     __slots__ = Image.__slots__  # genpy validates keyword fields against the class's own __slots__
     _slot_types = Image._slot_types
-
-    def serialize(self, buff: Any) -> None:
-        serialize_buffer_last(self, Image, buff)
-
-    def serialize_head(self, buff: Any) -> memoryview:
-        return serialize_head(self, Image, buff)
+    _genpy_class = Image
 
 
 def as_bytes_view(array: np.ndarray) -> memoryview:

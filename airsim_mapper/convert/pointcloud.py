@@ -1,10 +1,10 @@
 """sim Lidar -> sensor_msgs/PointCloud2 with x, y, z, intensity (float32) and segmentation (int32).
 
-All fields are packed as ONE numpy structured array (point_step 20, little-endian); its bytes are the
-message data. Inputs may be Python lists (what the 1.1.0 client delivers), numpy arrays, or raw
-little-endian bytes. ``intensity_cloud`` / ``segmentation_cloud`` default to zeros when absent (older
-servers); when present they must have one value per point. Points are in the sensor frame: FRD, or FLU
-(y and z negated) with the ENU convention.
+All fields are packed as ONE numpy structured array (point_step 20, little-endian); the message's data is a
+view of its bytes (`BufferPointCloud2`), written or sent from where they are. Inputs may be Python lists (what
+the 1.1.0 client delivers), numpy arrays, or raw little-endian bytes. ``intensity_cloud`` /
+``segmentation_cloud`` default to zeros when absent (older servers); when present they must have one value per
+point. Points are in the sensor frame: FRD, or FLU (y and z negated) with the ENU convention.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 from sensor_msgs.msg import PointCloud2, PointField
 
 from airsim_mapper.convert import sim_fields
+from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.stamps import header
@@ -26,6 +27,16 @@ POINT_DTYPE = np.dtype(
 )
 _ROS_TYPES = {np.dtype("<f4"): PointField.FLOAT32, np.dtype("<i4"): PointField.INT32}
 _ARRAY_CODES = {"<f4": ("f", np.float32), "<i4": ("i", np.intc)}  # array.array packs lists faster
+
+
+class BufferPointCloud2(BufferData, PointCloud2):
+    """sensor_msgs/PointCloud2 whose ``data`` may be any byte buffer (`buffer_data`); ``is_dense`` (one
+    byte) follows it."""
+
+    __slots__ = PointCloud2.__slots__
+    _slot_types = PointCloud2._slot_types
+    _genpy_class = PointCloud2
+    _after_data = 1
 
 
 def point_fields() -> list[PointField]:
@@ -84,7 +95,7 @@ def pointcloud(msg: Mapping[str, Any], ctx: ConvertContext) -> PointCloud2:
         cloud["z"] = xyz[:, 2]
     cloud["intensity"] = _optional(msg, "intensity_cloud", "<f4", count)
     cloud["segmentation"] = _optional(msg, "segmentation_cloud", "<i4", count)
-    return PointCloud2(
+    return BufferPointCloud2(
         header=header(msg, ctx),
         height=1,
         width=count,
@@ -92,6 +103,6 @@ def pointcloud(msg: Mapping[str, Any], ctx: ConvertContext) -> PointCloud2:
         is_bigendian=False,
         point_step=POINT_DTYPE.itemsize,
         row_step=POINT_DTYPE.itemsize * count,
-        data=cloud.tobytes(),
+        data=memoryview(cloud.view(np.uint8)),
         is_dense=bool(np.isfinite(flat).all()),
     )

@@ -21,6 +21,7 @@ import rospy
 import rospy.topics
 from rospy.impl.tcpros_pubsub import QueuedConnection
 
+from airsim_mapper.convert.buffer_data import Part
 from airsim_mapper.engine.ros_link import ConnectionPoll
 from airsim_mapper.tuning import tune_threads
 
@@ -39,7 +40,8 @@ class PromptQueuedConnection(QueuedConnection):
     the queue limit never drops (a message cut short would corrupt the stream). If it takes nothing, or
     anything is already waiting, the message is queued as in rospy. A slow subscriber therefore still
     never blocks the publisher, and the queue's drop-oldest limit still applies. `write_parts` does the
-    same for a message in two parts (`engine.publish`: a head, and an image's pixels where they are).
+    same for a message in parts (`engine.publish`: a head, then an image's pixels or a cloud's points
+    where they are): the rest of one the socket took in part stays views of them.
 
     rospy has the transport call a method of the connection when it closes, and the connection holds the
     transport: a reference cycle, so every connection a stopped publisher had (its topic, its transport,
@@ -49,7 +51,7 @@ class PromptQueuedConnection(QueuedConnection):
     """
 
     def __init__(self, connection, queue_size: int) -> None:
-        self._partial: memoryview | None = None  # the unsent rest of a message the socket took in part
+        self._partial: tuple[memoryview, ...] | None = None  # the unsent rest of a message taken in part
         self._busy = False  # the writer thread holds messages it took from the queue
         super().__init__(connection, queue_size)
         connection.set_cleanup_callback(WakeOnClose(self._cond_data_available))
@@ -57,12 +59,12 @@ class PromptQueuedConnection(QueuedConnection):
     def write_data(self, data: bytes) -> bool:
         return self._write((data,), len(data))
 
-    def write_parts(self, head: bytes, tail: memoryview) -> bool:
-        """`write_data` for a message in two parts, the second sent from where it is (`engine.publish`):
+    def write_parts(self, parts: tuple[Part, ...]) -> bool:
+        """`write_data` for a message in parts (flat buffers), sent from where they are (`engine.publish`):
         copied into one only when it must wait in the queue."""
-        return self._write((head, tail), len(head) + tail.nbytes)
+        return self._write(parts, sum(map(len, parts)))
 
-    def _write(self, parts: tuple[bytes | memoryview, ...], total: int) -> bool:
+    def _write(self, parts: tuple[Part, ...], total: int) -> bool:
         with self._lock:
             if self._error:
                 error, self._error = self._error, None
@@ -83,7 +85,7 @@ class PromptQueuedConnection(QueuedConnection):
             self._cond_data_available.notify()
         return True
 
-    def _send_now(self, parts: tuple[bytes | memoryview, ...]) -> int:
+    def _send_now(self, parts: tuple[Part, ...]) -> int:
         """Bytes of `parts` the socket took without blocking; 0 leaves them all to the writer thread."""
         sock = getattr(self._connection, "socket", None)
         if sock is None or self._connection.done or sock.gettimeout() is not None:
@@ -101,7 +103,9 @@ class PromptQueuedConnection(QueuedConnection):
             with self._lock:
                 while not self._queue and self._partial is None and not connection.done:
                     self._cond_data_available.wait()
-                batch = ([self._partial] if self._partial is not None else []) + self._queue
+                batch = ([self._partial] if self._partial is not None else []) + [
+                    (data,) for data in self._queue
+                ]
                 self._partial, self._queue = None, []
                 self._busy = True
             try:
@@ -111,25 +115,27 @@ class PromptQueuedConnection(QueuedConnection):
                 with self._lock:
                     self._busy = False
 
-    def _send(self, batch: list[bytes | memoryview]) -> None:
-        for data in batch:
+    def _send(self, batch: list[tuple[Part, ...]]) -> None:
+        connection = self._connection
+        for parts in batch:
             try:
-                self._connection.write_data(data)  # rospy's blocking sendall, its error handling
+                for part in parts[:-1]:
+                    connection.write_data(part)  # rospy's blocking sendall, its error handling
+                    connection.stat_num_msg -= 1  # which counts each write as a message
+                connection.write_data(parts[-1])
             except Exception as exc:
                 with self._lock:
                     self._error = exc
 
 
-def unsent(parts: tuple[bytes | memoryview, ...], sent: int) -> memoryview:
-    """What is left of `parts` after their first `sent` bytes, as one buffer: a view of the part it starts
-    in when that is the last, else a copy."""
+def unsent(parts: tuple[Part, ...], sent: int) -> tuple[memoryview, ...]:
+    """What is left of `parts` after their first `sent` bytes, as views of them (no copy)."""
     for index, part in enumerate(parts):
         view = memoryview(part)
         if sent < view.nbytes:
-            later = parts[index + 1 :]
-            return view[sent:] if not later else memoryview(b"".join((view[sent:], *later)))
+            return (view[sent:], *map(memoryview, parts[index + 1 :]))
         sent -= view.nbytes
-    return memoryview(b"")
+    return ()
 
 
 class WakeOnClose:

@@ -133,3 +133,35 @@ def test_non_numeric_points_are_rejected():
 def test_nested_point_lists_are_rejected():
     with pytest.raises(ConversionError, match=r"pointcloud: point_cloud must be a flat list of numbers"):
         pointcloud(lidar([[1.0, 2.0, 3.0]], [0.0], [0]), CTX)
+
+
+@pytest.mark.parametrize("convention", ["ned", "enu"])
+@pytest.mark.parametrize("dense", [True, False])
+def test_a_cloud_goes_on_the_wire_byte_for_byte_as_genpy_writes_it(convention, dense):
+    from io import BytesIO
+
+    from sensor_msgs.msg import PointCloud2
+
+    points = np.arange(30, dtype=np.float32)
+    if not dense:
+        points[4] = np.inf
+    msg = pointcloud(lidar(points.tolist(), intensity=[0.25] * 10), ConvertContext(convention=convention))
+    plain = PointCloud2(
+        **{**{name: getattr(msg, name) for name in PointCloud2.__slots__}, "data": bytes(msg.data)}
+    )
+    ours, genpys = BytesIO(), BytesIO()
+    msg.serialize(ours)
+    plain.serialize(genpys)
+    assert ours.getvalue() == genpys.getvalue()
+    assert PointCloud2().deserialize(ours.getvalue()).is_dense is dense
+
+
+def test_the_points_are_serialised_apart_from_where_they_are():
+    from io import BytesIO
+
+    msg = pointcloud(lidar([1.0, 2.0, 3.0] * 4), CTX)
+    head = BytesIO()
+    points, after = msg.serialize_apart(head)
+    assert isinstance(msg.data.obj, np.ndarray) and points.obj is msg.data.obj  # no copy of the points
+    assert (bytes(points), after) == (bytes(msg.data), b"\x01")
+    assert head.getvalue().endswith(len(points).to_bytes(4, "little"))

@@ -1,5 +1,5 @@
-"""engine.publish: an image handed over in parts is, on the wire, what rospy's publish sends, whether the
-socket takes it at once, in part, or only after others queued before it."""
+"""engine.publish: an image or a point cloud handed over in parts is, on the wire, what rospy's publish
+sends, whether the socket takes it at once, in part, or only after others queued before it."""
 
 from __future__ import annotations
 
@@ -16,10 +16,12 @@ import rospy.topics
 from rospy.exceptions import ROSException, ROSSerializationException
 from rospy.impl.tcpros_base import TCPROSTransport
 from rospy.impl.tcpros_pubsub import QueuedConnection, TCPROSPub
-from sensor_msgs.msg import CompressedImage, Image
+from sensor_msgs.msg import CompressedImage, Image, PointCloud2
 
 from airsim_mapper.convert.compressed_image import BufferCompressedImage
+from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.image import BufferImage
+from airsim_mapper.convert.pointcloud import BufferPointCloud2, pointcloud
 from airsim_mapper.engine.publish import publish
 from airsim_mapper.engine.realtime import PromptQueuedConnection, unsent
 
@@ -83,15 +85,15 @@ def image(pixels: bytes | memoryview, width: int = 4, height: int = 2) -> Buffer
     return out
 
 
-def sent_by_both(data_class: type, make: Any, times: int) -> tuple[bytes, bytes]:
+def sent_by_both(data_class: type, make: Any, times: int, plain: Any = None) -> tuple[bytes, bytes]:
     """What a subscriber reads of `times` messages from `make`, published through engine.publish and
-    through rospy's own publish."""
+    through rospy's own publish (of `plain(message)`, when given)."""
     ours, rospys = Publisher(data_class), Publisher(data_class)
     (_, our_end), (_, their_end) = connect(ours.impl), connect(rospys.impl)
     try:
         for _ in range(times):
             publish(ours, make())
-            rospys.publish(make())
+            rospys.publish(plain(make()) if plain else make())
         size = ours.impl.message_data_sent
         assert size == rospys.impl.message_data_sent
         return read(our_end, size), read(their_end, size)
@@ -115,6 +117,49 @@ def test_a_compressed_image_too() -> None:
 
     ours, rospys = sent_by_both(CompressedImage, make, times=2)
     assert ours == rospys
+
+
+def cloud(points: int, dense: bool = True) -> BufferPointCloud2:
+    xyz = np.arange(3 * points, dtype=np.float32)
+    if not dense:
+        xyz[1] = np.nan
+    sim = {
+        "time_stamp": 5,
+        "point_cloud": xyz.tobytes(),
+        "intensity_cloud": np.ones(points, np.float32).tobytes(),
+    }
+    return pointcloud(sim, ConvertContext(frame_id="Drone1/lidar1"))
+
+
+def genpy_cloud(message: BufferPointCloud2) -> PointCloud2:
+    """The same cloud as genpy builds it, its points in bytes."""
+    return PointCloud2(
+        **{**{name: getattr(message, name) for name in PointCloud2.__slots__}, "data": bytes(message.data)}
+    )
+
+
+@pytest.mark.parametrize("dense", [True, False])
+def test_a_point_cloud_too_with_the_field_after_its_points(dense: bool) -> None:
+    ours, genpys = sent_by_both(PointCloud2, lambda: cloud(5, dense), times=2, plain=genpy_cloud)
+    assert ours == genpys
+    assert ours.endswith(b"\x01" if dense else b"\x00")
+
+
+def test_a_cloud_the_socket_takes_in_part_arrives_whole_and_counts_once() -> None:
+    """100k points (2 MB) through a small send buffer: the rest, its points and is_dense, goes to the
+    writer thread as views."""
+    ours, genpys = sent_by_both(PointCloud2, lambda: cloud(100_000), times=2, plain=genpy_cloud)
+    assert ours == genpys
+    publisher = Publisher(PointCloud2)
+    connection, end = connect(publisher.impl)
+    publish(publisher, cloud(100_000))
+    read(end, publisher.impl.message_data_sent)
+    deadline = time.monotonic() + 10
+    while connection.stat_num_msg < 1 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    time.sleep(0.05)
+    assert (connection.stat_num_msg, connection.stat_bytes) == (1, publisher.impl.message_data_sent)
+    publisher.impl.close()
 
 
 def test_a_frame_id_of_none_is_sent_as_rospy_sends_it() -> None:
@@ -165,9 +210,9 @@ class Recording(PromptQueuedConnection):
         self.tails: list[memoryview] = []
         super().__init__(connection, queue_size)
 
-    def write_parts(self, head: bytes, tail: memoryview) -> bool:
-        self.tails.append(tail)
-        return super().write_parts(head, tail)
+    def write_parts(self, parts: tuple[bytes | memoryview, ...]) -> bool:
+        self.tails.append(parts[1])
+        return super().write_parts(parts)
 
 
 def test_the_pixels_are_handed_over_where_they_are() -> None:
@@ -264,13 +309,13 @@ def test_anything_else_goes_through_rospys_publish(case: str) -> None:
     publisher.impl.close()
 
 
-def test_unsent_is_a_view_of_the_last_part_and_a_copy_across_parts() -> None:
-    head, tail = b"head", memoryview(b"pixels")
-    assert bytes(unsent((head, tail), 2)) == b"adpixels"
-    rest = unsent((head, tail), 6)
-    assert bytes(rest) == b"xels" and rest.obj is tail.obj
-    assert bytes(unsent((b"data",), 1)) == b"ata"
-    assert bytes(unsent((head, tail), 10)) == b""
+def test_unsent_is_views_of_what_is_left() -> None:
+    head, points, after = b"head", memoryview(b"points"), b"\x01"
+    assert [bytes(part) for part in unsent((head, points, after), 2)] == [b"ad", b"points", b"\x01"]
+    rest = unsent((head, points, after), 6)
+    assert [bytes(part) for part in rest] == [b"ints", b"\x01"] and rest[0].obj is points.obj
+    assert [bytes(part) for part in unsent((b"data",), 1)] == [b"ata"]
+    assert unsent((head, points), 10) == ()
 
 
 def test_threads_may_publish_at_once() -> None:

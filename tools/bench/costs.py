@@ -20,12 +20,11 @@ from typing import Any
 
 import msgpack
 import numpy as np
-from sensor_msgs.msg import Image
 
 from airsim_mapper.convert import registry
+from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.image import BufferImage
 from airsim_mapper.engine.receive import decode_body
 from airsim_mapper.simserver import protocol
 from tools.bench import reference
@@ -128,13 +127,15 @@ def radar_frame(detections: int = RADAR_DETECTIONS, seed: int = 0) -> bytes:
 
 
 def as_genpy(msg: Any) -> Any:
-    """The same message as plain genpy builds it: a BufferImage becomes an Image holding bytes.
+    """The same message as plain genpy builds it: a Buffer* message (a BufferImage, a BufferPointCloud2)
+    becomes its genpy class holding bytes.
 
     The bare-serialisation baseline is genpy's own serialiser on bytes, as any rospy node would publish.
     """
-    if isinstance(msg, BufferImage):
-        fields = {name: getattr(msg, name) for name in Image.__slots__}
-        return Image(**{**fields, "data": bytes(msg.data)})
+    if isinstance(msg, BufferData):
+        plain = msg._genpy_class
+        fields = {name: getattr(msg, name) for name in plain.__slots__}
+        return plain(**{**fields, "data": bytes(msg.data)})
     return msg
 
 
