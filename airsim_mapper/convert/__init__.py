@@ -2,10 +2,10 @@
 
 `catalog` lists them (importable without ROS); `registry.get(name)` returns the implementation. Its face
 (`__all__`, the modules the layers above import): `catalog`, `registry`, `context` (ConvertContext),
-`errors`, and the helpers the engine's runners share with the converters (`command.require_finite`,
-`pose.camera_pose_key`).
+`errors`, the helpers the engine's runners share with the converters (`command.require_finite`,
+`pose.camera_pose_key`), and `buffer_data` (the parts of a message sent apart, which the engine publishes).
 """
 
 from __future__ import annotations
 
-__all__ = ["catalog", "command", "context", "errors", "pose", "registry"]
+__all__ = ["buffer_data", "catalog", "command", "context", "errors", "pose", "registry"]
