@@ -11,9 +11,9 @@ the bytes once, and a publisher can send them from where they are (`engine.publi
 from __future__ import annotations
 
 import struct
-from typing import Any
+from typing import Any, Union
 
-Part = bytes | memoryview  # a flat byte buffer, one part of a serialised message
+Part = Union[bytes, memoryview]  # a flat byte buffer, one part of a serialised message
 LENGTH = struct.Struct("<I")  # the length before a uint8[]'s bytes
 
 
@@ -21,7 +21,9 @@ class BufferData:
     """Mixin of a genpy message class whose ``data`` (uint8[]) may be any byte buffer.
 
     `_genpy_class` is the genpy class; `_after_data` the size of its fixed-size fields after ``data`` (0 when
-    ``data`` is the last field). Same type, md5sum and bytes on the wire as the genpy class.
+    ``data`` is the last field). Same type, md5sum and bytes on the wire as the genpy class; but not equal
+    to a genpy message holding the same bytes, and not for deepcopy or pickling (``data`` is a view).
+    `serialize_apart` needs `buff` positioned at its end: it truncates what follows.
     """
 
     __slots__ = ()

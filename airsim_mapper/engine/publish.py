@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import struct
 from collections.abc import Callable
 from typing import Any
 
@@ -23,11 +22,10 @@ import genpy
 from rospy.core import is_shutdown
 from rospy.exceptions import ROSSerializationException
 
-from airsim_mapper.convert.buffer_data import Part
+from airsim_mapper.convert.buffer_data import LENGTH, Part
 from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.publish")
-LENGTH = struct.Struct("<I")  # TCPROS frames each message with its length
 
 
 def publish(publisher: Any, message: Any) -> None:

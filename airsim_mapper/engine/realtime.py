@@ -123,9 +123,10 @@ class PromptQueuedConnection(QueuedConnection):
                     connection.write_data(part)  # rospy's blocking sendall, its error handling
                     connection.stat_num_msg -= 1  # which counts each write as a message
                 connection.write_data(parts[-1])
-            except Exception as exc:
+            except Exception as exc:  # the connection is closed: the rest of the batch goes nowhere
                 with self._lock:
-                    self._error = exc
+                    self._error = exc.with_traceback(None)  # its frames would keep the batch's views alive
+                break
 
 
 def unsent(parts: tuple[Part, ...], sent: int) -> tuple[memoryview, ...]:

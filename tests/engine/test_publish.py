@@ -152,14 +152,21 @@ def test_a_cloud_the_socket_takes_in_part_arrives_whole_and_counts_once() -> Non
     assert ours == genpys
     publisher = Publisher(PointCloud2)
     connection, end = connect(publisher.impl)
-    publish(publisher, cloud(100_000))
-    read(end, publisher.impl.message_data_sent)
-    deadline = time.monotonic() + 10
-    while connection.stat_num_msg < 1 and time.monotonic() < deadline:
-        time.sleep(0.01)
-    time.sleep(0.05)
-    assert (connection.stat_num_msg, connection.stat_bytes) == (1, publisher.impl.message_data_sent)
-    publisher.impl.close()
+    taken: list[int] = []
+    send_now = connection._send_now
+    connection._send_now = lambda parts: taken.append(send_now(parts)) or taken[-1]
+    try:
+        publish(publisher, cloud(100_000))
+        size = publisher.impl.message_data_sent
+        assert len(taken) == 1 and 0 < taken[0] < size  # sent in part at once, the rest by the writer
+        read(end, size)
+        deadline = time.monotonic() + 10
+        while connection.stat_num_msg < 1 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.05)
+        assert (connection.stat_num_msg, connection.stat_bytes) == (1, size)
+    finally:
+        publisher.impl.close()
 
 
 def test_a_frame_id_of_none_is_sent_as_rospy_sends_it() -> None:

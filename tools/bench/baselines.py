@@ -52,9 +52,11 @@ def ros_message(kind: str) -> Any:
 
     if kind == "image":
         frame = costs.image_frame(WIDTH, HEIGHT, "BGR")
-        return registry.get("image")(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
-    frame = costs.lidar_frame(POINTS)
-    return registry.get("pointcloud")(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
+        msg = registry.get("image")(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
+    else:
+        frame = costs.lidar_frame(POINTS)
+        msg = registry.get("pointcloud")(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
+    return costs.as_genpy(msg)  # what any rospy node publishes: genpy's message on bytes
 
 
 def rospy_pub(kind: str, rate: float) -> int:
