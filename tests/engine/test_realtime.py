@@ -97,6 +97,37 @@ def test_a_writer_error_surfaces_on_the_next_publish() -> None:
     conn._closed_connection_callback(transport)
 
 
+def test_a_batch_stops_at_its_first_error_and_keeps_no_traceback() -> None:
+    """After a failed write the connection is gone: what was queued behind is not written, and the error
+    kept for the next publish holds no frames (which would keep the sent messages' buffers alive)."""
+    transport = FakeTransport()
+    transport.gate.clear()
+    written = transport.write_data
+
+    def fail_on_one(data: bytes) -> None:
+        if data == b"1":
+            raise OSError("peer went away")
+        written(data)
+
+    transport.write_data = fail_on_one
+    conn = PromptQueuedConnection(transport, 3)
+    try:
+        conn.write_data(b"0")
+        time.sleep(0.05)  # the writer thread takes b"0" and blocks on the gate
+        conn.write_data(b"1")
+        conn.write_data(b"2")  # one batch with b"1"
+        transport.gate.set()
+        deadline = time.monotonic() + 5
+        while conn._error is None and time.monotonic() < deadline:
+            time.sleep(0.005)
+        time.sleep(0.05)
+        assert transport.written == [b"0"]
+        assert conn._error is not None and conn._error.__traceback__ is None
+    finally:
+        transport.done = True
+        conn._closed_connection_callback(transport)
+
+
 class SocketTransport:
     """The part of a rospy TCPROS transport that the connection uses, over one end of a socket pair."""
 
