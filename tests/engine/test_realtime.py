@@ -117,9 +117,7 @@ def test_a_batch_stops_at_its_first_error_and_keeps_no_traceback() -> None:
         conn.write_data(b"1")
         conn.write_data(b"2")  # one batch with b"1"
         transport.gate.set()
-        deadline = time.monotonic() + 5
-        while conn._error is None and time.monotonic() < deadline:
-            time.sleep(0.005)
+        wait_until(lambda: conn._error is not None, 5, what="the writer's error")
         time.sleep(0.05)
         assert transport.written == [b"0"]
         assert conn._error is not None and conn._error.__traceback__ is None

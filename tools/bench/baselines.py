@@ -51,11 +51,10 @@ def ros_message(kind: str) -> Any:
     from tools.bench import costs
 
     if kind == "image":
-        frame = costs.image_frame(WIDTH, HEIGHT, "BGR")
-        msg = registry.get("image")(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
+        converter, frame = "image", costs.image_frame(WIDTH, HEIGHT, "BGR")
     else:
-        frame = costs.lidar_frame(POINTS)
-        msg = registry.get("pointcloud")(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
+        converter, frame = "pointcloud", costs.lidar_frame(POINTS)
+    msg = registry.get(converter)(costs.client_unpack(frame), ConvertContext(frame_id="bench"))
     return costs.as_genpy(msg)  # what any rospy node publishes: genpy's message on bytes
 
 
