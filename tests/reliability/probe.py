@@ -9,7 +9,8 @@ probe.py twist TOPIC N VX [FRAME]   publish N geometry_msgs/Twist at 10 Hz (VX m
 probe.py pose TOPIC X Y Z QW QX QY QZ [FRAME]   publish one PoseStamped 3 times, print "SENT"
 probe.py trials TOPIC N VX SERVICESPORT ROBOT   watchdog trials: print "TRIAL <seconds>" per trial
 probe.py bad ROBOT_PREFIX CAMERA  publish malformed cmd_vel and desired_pose messages, print "SENT <n>"
-probe.py strings TOPIC DATA...  publish each DATA as a std_msgs/String, 0.5 s apart, then print "SENT"
+probe.py strings TOPIC [--every S] DATA...  publish each DATA as a std_msgs/String, S s apart (0.5 unless
+                               told), then print "SENT"
 probe.py huge TOPIC N SIZE      publish N distinct std_msgs/String of SIZE characters, 0.05 s apart, "SENT"
 probe.py stamped TOPIC...      print "T <index> <monotonic time> <stamp>" for every message on each TOPIC (any
                                type with a header first, or /clock); the stamp is read from the raw bytes
@@ -111,14 +112,14 @@ def pose(topic: str, values: list[float], frame: str) -> None:
     rospy.spin()
 
 
-def strings(topic: str, items: list[str]) -> None:
+def strings(topic: str, items: list[str], every: float = 0.5) -> None:
     from std_msgs.msg import String
 
     pub = rospy.Publisher(topic, String, queue_size=10)
     connected(pub)
     for item in items:
         pub.publish(String(data=item))
-        time.sleep(0.5)
+        time.sleep(every)
     print("SENT", flush=True)
     rospy.spin()
 
@@ -227,6 +228,8 @@ def main(argv: list[str]) -> None:
         bad(args[0], args[1])
     elif mode == "huge":
         huge(args[0], int(args[1]), int(args[2]))
+    elif mode == "strings" and args[1:2] == ["--every"]:
+        strings(args[0], args[3:], float(args[2]))
     elif mode == "strings":
         strings(args[0], args[1:])
     elif mode == "stamped":
