@@ -52,6 +52,7 @@ TopicCallback = Callable[[Any, Any], None]
 WARN_PERIOD_S = 5.0
 MAX_FRAME_MB = 64.0  # default cap on one simulator frame (a 4K BGR image is 25 MB)
 MESSAGE_FRAME = 2  # projectairsim.types.FrameType.MESSAGE: the only type a server sends to a client
+SETTLE_S = 1.0  # at most this long for cancelled requests to hear back from NNG when the link stops
 
 
 @dataclass
@@ -355,8 +356,19 @@ class SimLink:
         asyncio.set_event_loop(self._loop)
         try:
             self._loop.run_forever()
+            self._settle()
         finally:
             self._loop.close()  # its selector and wake-up pipe go now, not whenever the collector runs
+
+    def _settle(self) -> None:
+        """Cancel the requests still waiting (a frozen simulator answers none) and run the loop until NNG's
+        completions of them arrive: one arriving after the loop closed would raise on NNG's thread, and a
+        request left pending would be finalised with its NNG context still open."""
+        waiting = asyncio.all_tasks(self._loop)
+        for task in waiting:
+            task.cancel()
+        if waiting:
+            self._loop.run_until_complete(asyncio.wait(waiting, timeout=SETTLE_S))
 
     def stop_loop(self) -> None:
         """Stop the request loop thread (pending requests are abandoned)."""

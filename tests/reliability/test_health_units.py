@@ -3,6 +3,7 @@ re-registration with a restarted master, and the converter registry's closed wor
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import pytest
@@ -21,7 +22,7 @@ from airsim_mapper.engine.health import (
     open_client,
 )
 from airsim_mapper.engine.reregister import ReregisterError, _check, needs_registration
-from airsim_mapper.engine.sim_link import SimLink, SimLinkDead
+from airsim_mapper.engine.sim_link import SimLink, SimLinkDead, SimLinkError
 from airsim_mapper.engine.status import status_topic
 
 
@@ -147,3 +148,34 @@ def test_a_log_budget_logs_so_many_per_period_then_says_how_many_it_held_back(ca
         "refused 1",
         "refused 5 (3 more not logged before this one)",
     ]
+
+
+@pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
+def test_requests_still_waiting_when_the_link_stops_end_before_its_loop_closes(capfd):
+    """A frozen simulator leaves requests waiting on NNG; stopping the link cancels them and lets NNG's
+    completions reach the loop before it closes (after it, pynng's callback raises on NNG's thread)."""
+    import msgpack
+    import pynng
+
+    class Client:
+        socket_topics = None
+
+        def __init__(self, address: str) -> None:
+            self.socket_services = pynng.Req0(dial=address)
+
+        def preprocess_request(self, request: dict) -> bytes:
+            return msgpack.packb(request)
+
+    address = f"tcp://127.0.0.1:{free_port()}"
+    with pynng.Rep0(listen=address) as silent:  # takes every request, answers none
+        client = Client(address)
+        link = SimLink(client)
+        waiting = [link.call_async("/Sim/Frozen", {}) for _ in range(3)]
+        with pytest.raises(SimLinkError, match=r"^/Sim/Frozen: no reply within 0\.2 s$"):
+            link.call("/Sim/Frozen", {}, timeout=0.2)
+        link.stop_loop()
+        assert link._loop.is_closed() and all(future.done() for future in waiting)
+        client.socket_services.close()  # any completion still owed would arrive now, to a closed loop
+        silent.close()
+    time.sleep(0.2)
+    assert "Traceback" not in capfd.readouterr().err
