@@ -6,7 +6,7 @@ node's or a mission script's first records is lost."""
 from __future__ import annotations
 
 import pytest
-from harness import DEVEL_SETUP, SIM_CONFIG, Rig, stock_tool
+from harness import DEVEL_SETUP, SIM_CONFIG, Rig, stock_tool, wait_until
 
 pytestmark = pytest.mark.live
 
@@ -77,10 +77,18 @@ def test_a_mission_script_that_makes_the_wrapper_at_once_keeps_its_records_in_ro
         "mission", ["-c", MISSION, str(sim.topics_port), str(sim.services_port), str(SIM_CONFIG)]
     )
     launcher.wait_topics([f"{RADAR}/radar_detections"], mission)
-    launcher.stop(mission)
-    (rosout_log,) = [p for p in launcher.workdir.glob("ros_log/*/rosout.log") if p.parent.name != "latest"]
-    records = [line for line in rosout_log.read_text().splitlines() if " /quick_mission [" in line]
+    loaded = "scene_radar_tower.jsonc) loaded:"  # logged after its topics appear
+    wait_until(lambda: loaded in mission.output(), 20, what="the scene loaded")
+
+    def records() -> list[str]:
+        logs = [p for p in launcher.workdir.glob("ros_log/*/rosout.log") if p.parent.name != "latest"]
+        return [line for p in logs for line in p.read_text().splitlines() if " /quick_mission [" in line]
+
+    def has(text: str) -> bool:
+        return any(text in line for line in records())
+
     # /rosout latches only its last record: the wrapper waits for rosout before it (or the client it
-    # opens) logs, as the node does
-    assert any("Connecting to simulation server" in line for line in records), records[:5]
-    assert any("scene_radar_tower.jsonc) loaded:" in line for line in records), records[:5]
+    # opens) logs, as the node does; rosout writes each record as it receives it
+    wait_until(lambda: has(loaded), 10, what="the loaded record in rosout.log")
+    assert has("Connecting to simulation server"), records()[:5]
+    launcher.stop(mission)
