@@ -85,7 +85,7 @@ def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_pa
     assert pixels.std() > 20
     colours = np.unique(pixels.reshape(-1, 3), axis=0)
     assert len(colours) > 300
-    background = np.all(pixels == (40, 40, 48), axis=-1).mean()  # the config's 3D background colour
+    background = screenshot.background_share(pixels, screenshot.config_background())  # the 3D view drawn
     assert 0.05 < background < 0.9
 
     # everything it started is gone: the display, the master and the simulator's ports
@@ -95,6 +95,15 @@ def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_pa
     for pattern in (f"roscore -p {port}", f"--topicsport {report['sim_ports'][0]}", str(tmp_path / "logs")):
         leftovers = subprocess.run(["pgrep", "-f", "--", pattern], capture_output=True, text=True)
         assert leftovers.returncode == 1, f"{pattern}: {leftovers.stdout}"
+
+
+def test_the_capture_knows_the_3d_view_is_drawn_by_the_configs_background_colour():
+    colour = screenshot.config_background()
+    assert colour == (40, 40, 48)  # rviz/airsim_mapper.rviz's Global Options
+    black = np.zeros((4, 6, 3), np.uint8)  # RViz's 3D view before llvmpipe's first frame
+    assert screenshot.background_share(black, colour) == 0.0
+    black[:2] = colour
+    assert screenshot.background_share(black, colour) == 0.5
 
 
 def test_a_crash_of_rviz_itself_is_told_from_other_early_exits():

@@ -134,6 +134,20 @@ def config_topics(path: Path = CONFIG) -> dict[str, str]:
     return found
 
 
+def config_background(path: Path = CONFIG) -> tuple[int, int, int]:
+    """The 3D view's background colour in the config (RViz writes it as "R; G; B")."""
+    import yaml
+
+    options = yaml.safe_load(Path(path).read_text())["Visualization Manager"]["Global Options"]
+    red, green, blue = (int(v) for v in options["Background Color"].split(";"))
+    return red, green, blue
+
+
+def background_share(rgb: np.ndarray, colour: tuple[int, int, int]) -> float:
+    """The share of the screen in `colour`: 0 until RViz has drawn its 3D view once."""
+    return float(np.all(rgb == np.array(colour, dtype=rgb.dtype), axis=-1).mean())
+
+
 def config_frames(path: Path = CONFIG) -> set[str]:
     """The tf frames the config's TF displays enable by name, plus the fixed frame."""
     import yaml
@@ -283,12 +297,19 @@ class RvizStack:
             if not child.alive():
                 raise ChildExited(child.name, child.log_path)
 
-    def capture(self, out: Path) -> dict[str, float]:
-        """The X screen as a PNG; returns its image statistics."""
-        rgb = read_xwd(self.framebuffer)
+    def capture(self, out: Path, timeout: float) -> dict[str, float]:
+        """The X screen as a PNG, once RViz has drawn its 3D view (on a busy host llvmpipe's first frame
+        can come seconds after the data; at most `timeout` s more); returns its image statistics."""
+        background, deadline = config_background(), time.monotonic() + timeout
+        while True:
+            self.check_running()
+            rgb = read_xwd(self.framebuffer)
+            if background_share(rgb, background) > 0 or time.monotonic() > deadline:
+                break
+            time.sleep(0.5)
         out.parent.mkdir(parents=True, exist_ok=True)
         write_png(out, rgb)
-        return image_stats(rgb)
+        return {**image_stats(rgb), "background": background_share(rgb, background)}
 
     def stop(self) -> None:
         """SIGINT (roslaunch then stops its nodes), wait, then SIGKILL whatever is left of each tree."""
@@ -404,8 +425,7 @@ def take(options: Options) -> dict[str, Any]:
             if options.away_m > 0:
                 with contextlib.suppress(ScreenshotError):
                     wait_for(lambda: watch.away(options.away_m), 30, f"the drone {options.away_m:.0f} m out")
-            stack.check_running()
-            stats = stack.capture(options.out)
+            stats = stack.capture(options.out, RENDER_WAIT_S)
             report = {
                 "png": str(options.out),
                 "size": [options.width, options.height],
@@ -453,6 +473,7 @@ def parse_args(argv: Sequence[str] | None) -> Options:
     return Options(args.out, args.report, args.settle, args.away, args.timeout, width, height, args.keep)
 
 
+RENDER_WAIT_S = 60.0  # after the settle time, for RViz's first drawn frame of its 3D view
 RETRIED_ENV = "AIRSIM_MAPPER_SCREENSHOT_RETRIED"  # how many times RViz crashed at start-up so far
 RVIZ_STARTS = 3  # RViz start-ups tried before a crash counts as an error
 _RVIZ_CRASH = re.compile(r"REQUIRED process \[rviz-\d+\] has died!.*?exit code -\d+", re.S)
