@@ -153,6 +153,10 @@ def test_a_node_on_another_host_streams_through_delay_and_loss_and_outlives_a_li
     wire.popen.send_signal(signal.SIGUSR2)
     wait_until(lambda: between(records(probe), 0, up, 1e12), 60, what="poses after the link came back")
     back = between(records(probe), 0, up, 1e12)[0][0]
+    # The health probes have a connection of their own, with a retransmission backoff of its own: the status
+    # says connected again once one is answered, which came after the poses in one run in three
+    bound = up + 2.5 * OUTAGE_S + 5.0 - time.monotonic()
+    wait_until(lambda: "nothing reloaded" in node.output(), max(bound, 1.0), what="a health probe answered")
     time.sleep(5.0)
     end = time.monotonic()
     rows = records(probe)
