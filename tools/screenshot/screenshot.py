@@ -297,19 +297,17 @@ class RvizStack:
             if not child.alive():
                 raise ChildExited(child.name, child.log_path)
 
-    def capture(self, out: Path, timeout: float) -> dict[str, float]:
-        """The X screen as a PNG, once RViz has drawn its 3D view (on a busy host llvmpipe's first frame
-        can come seconds after the data; at most `timeout` s more); returns its image statistics."""
-        background, deadline = config_background(), time.monotonic() + timeout
-        while True:
-            self.check_running()
-            rgb = read_xwd(self.framebuffer)
-            if background_share(rgb, background) > 0 or time.monotonic() > deadline:
-                break
-            time.sleep(0.5)
+    def drawn(self) -> bool:
+        """RViz has drawn its 3D view once: the config's background colour is on the screen (before
+        llvmpipe's first frame the view is black)."""
+        return background_share(read_xwd(self.framebuffer), config_background()) > 0
+
+    def capture(self, out: Path) -> dict[str, float]:
+        """The X screen as a PNG; returns its image statistics."""
+        rgb = read_xwd(self.framebuffer)
         out.parent.mkdir(parents=True, exist_ok=True)
         write_png(out, rgb)
-        return {**image_stats(rgb), "background": background_share(rgb, background)}
+        return {**image_stats(rgb), "background": background_share(rgb, config_background())}
 
     def stop(self) -> None:
         """SIGINT (roslaunch then stops its nodes), wait, then SIGKILL whatever is left of each tree."""
@@ -425,7 +423,11 @@ def take(options: Options) -> dict[str, Any]:
             if options.away_m > 0:
                 with contextlib.suppress(ScreenshotError):
                     wait_for(lambda: watch.away(options.away_m), 30, f"the drone {options.away_m:.0f} m out")
-            stats = stack.capture(options.out, RENDER_WAIT_S)
+            # on a busy host llvmpipe's first frame can come seconds after the data
+            with contextlib.suppress(ScreenshotError):
+                wait_for(stack.drawn, RENDER_WAIT_S, "RViz's first frame of its 3D view")
+            stack.check_running()
+            stats = stack.capture(options.out)
             report = {
                 "png": str(options.out),
                 "size": [options.width, options.height],
