@@ -4,7 +4,10 @@ A server that is killed or restarted closes its TCP connections, which NNG repor
 the link notices that at once (SimLink.connected), and only then is the link lost (the node reconnects
 and reloads the scene). A server that stalls (stopped, swapping, stuck in a long frame) keeps its
 connections and its scene; `HealthCheck` then calls it unresponsive after a few unanswered probes in a
-row, and answering again after that, without any reload: reloading would reset the simulation.
+row with no topic frame arriving either, and answering again at the first answer or frame after that,
+without any reload: reloading would reset the simulation. Frames count as answers because the two
+connections recover apart: after a network outage each waits for its own TCP retransmission backoff, and
+the topics could flow again for seconds while the probes' connection still waited.
 
 A port that accepts connections but never answers (another program, or a hung simulator) is told apart
 from one where nothing listens: `open_client` waits at most `first_answer` seconds for the NNG handshake
@@ -14,6 +17,7 @@ and then for the answer to one cheap request, and raises SimSilent if either doe
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -22,6 +26,7 @@ from airsim_mapper.engine.errors import EngineError
 PROBE_PERIOD_S = 0.5
 PROBE_TIMEOUT_S = 1.0
 PROBE_MISSES = 3
+FRAMES_FRESH_S = PROBE_MISSES * PROBE_TIMEOUT_S  # a topic frame this recent shows the simulator runs
 PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 FIRST_ANSWER_S = 10.0  # a new connection's first answer; NNG's own handshake timeout is also 10 s
 CLIENT_RECV_TIMEOUT_MS = 300000  # the client's own services timeout, restored after the first answer
@@ -136,23 +141,30 @@ class Backoff:
 
 @dataclass
 class HealthCheck:
-    """Turns per-period observations of a link into a Verdict."""
+    """Turns per-period observations of a link into a Verdict.
+
+    `frame_age` gives the seconds since the newest topic frame arrived (read after the probe, so that
+    frames arriving while it waited count). A missed probe with such a frame under FRAMES_FRESH_S old is
+    not a stall: the verdict is OK, with the missed probes as its reason."""
 
     misses_to_stall: int = PROBE_MISSES
     probe_timeout: float = PROBE_TIMEOUT_S
+    frames_fresh: float = FRAMES_FRESH_S
     misses: int = 0
 
-    def check(self, link: Probed) -> Verdict:
+    def check(self, link: Probed, frame_age: Callable[[], float]) -> Verdict:
         if not link.connected():
             return Verdict(LOST, "the simulator closed the connection")
         if link.probe(self.probe_timeout):
             self.misses = 0
             return Verdict(OK)
         self.misses += 1
-        if self.misses >= self.misses_to_stall:
-            why = f"no answer to {self.misses} probes of {self.probe_timeout:g} s; the connection is open"
-            return Verdict(UNRESPONSIVE, why)
-        return Verdict(OK)
+        if self.misses < self.misses_to_stall:
+            return Verdict(OK)
+        why = f"no answer to {self.misses} probes of {self.probe_timeout:g} s"
+        if frame_age() < self.frames_fresh:
+            return Verdict(OK, f"{why}, but topic frames arrive")
+        return Verdict(UNRESPONSIVE, f"{why}; the connection is open")
 
     def reset(self) -> None:
         self.misses = 0

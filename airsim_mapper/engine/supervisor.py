@@ -3,13 +3,13 @@
 Simulator loss (health.py decides; only a closed connection is a loss): the link is abandoned at once
 (its calls fail fast, its sockets are closed so a restarted server's single topics connection is free),
 the status topic says "stale", and robots are no longer considered moving. A simulator that stops
-answering on an open connection is only reported stale ("unresponsive") until it answers again: nothing
-is reloaded, because it still has its scene. The status topic is published by a thread of its own, at
-its rate, whatever the simulator does. If the engine may make clients (`client_factory`), the supervisor
-reconnects with backoff: a new client, the last scene reloaded, and the same streams re-subscribed on the
-new link, so ROS publishers, subscribers and their peers never notice more than a pause. A client
-supplied by a mission script is never replaced behind its owner's back: the engine only reports "stale"
-until the script loads or adopts a scene again.
+answering on an open connection, and sends no topic frames either, is only reported stale
+("unresponsive") until it answers or sends again: nothing is reloaded, because it still has its scene.
+The status topic is published by a thread of its own, at its rate, whatever the simulator does. If the
+engine may make clients (`client_factory`), the supervisor reconnects with backoff: a new client, the
+last scene reloaded, and the same streams re-subscribed on the new link, so ROS publishers, subscribers
+and their peers never notice more than a pause. A client supplied by a mission script is never replaced
+behind its owner's back: the engine only reports "stale" until the script loads or adopts a scene again.
 
 The supervisor owns the connection state (`state`, `reason`, `counters`, when a stall began); it changes
 it under the engine's lock, since a loss also stops the bridges' robots and a reconnect swaps the link
@@ -18,6 +18,7 @@ the bridges use.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -94,7 +95,7 @@ class Supervisor:
             now = time.monotonic()
             if self.state == CONNECTED or self.stalled_since is not None:
                 self.engine.sim.ensure_receiver()
-                verdict = check.check(self.engine.sim)
+                verdict = check.check(self.engine.sim, self._frame_age)
                 if not self.running:
                     break
                 if verdict.kind == LOST:
@@ -102,7 +103,7 @@ class Supervisor:
                     backoff.reset()
                     next_attempt = time.monotonic() + backoff.next_delay()
                 elif verdict.kind == OK:
-                    self._answering()
+                    self._answering(verdict.reason)
                 else:
                     self._stalled(verdict.reason)
             elif self.client_factory is not None and now >= next_attempt and self.running:
@@ -130,17 +131,27 @@ class Supervisor:
         log.error("simulator not answering (%s); topics are stale; waiting for it", reason)
         self.publish_status()
 
-    def _answering(self) -> None:
-        """A probe was answered: an unresponsive simulator is back, on the same connection and scene."""
+    def _frame_age(self) -> float:
+        """Seconds since the newest topic frame arrived (infinite before any)."""
+        newest = self.engine.hub.newest_arrival()
+        return time.monotonic() - newest if newest else math.inf
+
+    def _answering(self, reason: str) -> None:
+        """A probe was answered, or topic frames arrive (`reason` then says which probes went unanswered):
+        an unresponsive simulator is back, on the same connection and scene."""
         with self.engine.lock:
             since = self.stalled_since
             if since is None:
+                if self.state == CONNECTED:
+                    self.reason = reason
                 return
             self.stalled_since = None
-            self.state, self.reason = CONNECTED, ""
+            self.state, self.reason = CONNECTED, reason
+        how = "its topic frames arrive; its probes not yet" if reason else "a probe was answered"
         log.warning(
-            "simulator answers again after %.1f s; its scene kept running, nothing reloaded",
+            "simulator answers again after %.1f s (%s); its scene kept running, nothing reloaded",
             time.monotonic() - since,
+            how,
         )
         self.publish_status()
 

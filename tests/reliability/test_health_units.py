@@ -3,6 +3,7 @@ re-registration with a restarted master, and the converter registry's closed wor
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -49,16 +50,33 @@ class FakeLink:
         return self.answers.pop(0)
 
 
+def no_frames() -> float:
+    return math.inf
+
+
 def test_a_dropped_connection_is_lost_at_once():
-    assert HealthCheck().check(FakeLink(up=False)) == Verdict(LOST, "the simulator closed the connection")
+    verdict = HealthCheck().check(FakeLink(up=False), no_frames)
+    assert verdict == Verdict(LOST, "the simulator closed the connection")
 
 
 def test_unanswered_probes_on_an_open_connection_mean_unresponsive_never_lost_until_an_answer():
     check = HealthCheck()
     link = FakeLink(answers=[False, False, True, False, False, False, False, True])
-    verdicts = [check.check(link) for _ in range(8)]
+    verdicts = [check.check(link, no_frames) for _ in range(8)]
     assert [v.kind for v in verdicts] == [OK] * 5 + [UNRESPONSIVE] * 2 + [OK]
     assert verdicts[5].reason == "no answer to 3 probes of 1 s; the connection is open"
+
+
+def test_topic_frames_arriving_while_probes_go_unanswered_are_no_stall_and_the_verdict_says_so():
+    """After a network outage the topics connection may flow seconds before the probes' one recovers."""
+    check = HealthCheck()
+    link = FakeLink(answers=[False] * 7 + [True])
+    ages = [math.inf, math.inf, math.inf, math.inf, 0.2, 2.9, 3.1, 9.0]  # seconds, at each check
+    verdicts = [check.check(link, lambda age=age: age) for age in ages]
+    assert [v.kind for v in verdicts] == [OK, OK, UNRESPONSIVE, UNRESPONSIVE, OK, OK, UNRESPONSIVE, OK]
+    assert verdicts[4] == Verdict(OK, "no answer to 5 probes of 1 s, but topic frames arrive")
+    assert verdicts[6].reason == "no answer to 7 probes of 1 s; the connection is open"
+    assert verdicts[7] == Verdict(OK)
 
 
 def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable():
