@@ -26,7 +26,9 @@ from airsim_mapper.engine.errors import EngineError
 PROBE_PERIOD_S = 0.5
 PROBE_TIMEOUT_S = 1.0
 PROBE_MISSES = 3
-FRAMES_FRESH_S = PROBE_MISSES * PROBE_TIMEOUT_S  # a topic frame this recent shows the simulator runs
+# A topic frame this recent (since about the previous check) shows the simulator runs. A frozen one is
+# still found at the PROBE_MISSES-th miss, (PROBE_MISSES - 1) checks after its last frame at the earliest.
+FRAMES_FRESH_S = PROBE_TIMEOUT_S + PROBE_PERIOD_S
 PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 FIRST_ANSWER_S = 10.0  # a new connection's first answer; NNG's own handshake timeout is also 10 s
 CLIENT_RECV_TIMEOUT_MS = 300000  # the client's own services timeout, restored after the first answer
@@ -144,8 +146,8 @@ class HealthCheck:
     """Turns per-period observations of a link into a Verdict.
 
     `frame_age` gives the seconds since the newest topic frame arrived (read after the probe, so that
-    frames arriving while it waited count). A missed probe with such a frame under FRAMES_FRESH_S old is
-    not a stall: the verdict is OK, with the missed probes as its reason."""
+    frames arriving while it waited count). From the `misses_to_stall`-th missed probe in a row, a frame
+    under `frames_fresh` old means no stall: the verdict is OK, with the missed probes as its reason."""
 
     misses_to_stall: int = PROBE_MISSES
     probe_timeout: float = PROBE_TIMEOUT_S

@@ -1,8 +1,8 @@
 """The node's status topic: `/airsim_mapper/<node>/status`, a latched std_msgs/String holding JSON.
 
 Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
-"unresponsive: ..." while it is open; while connected, health probes still unanswered as topic frames
-arrive), reconnects, sim_losses, stalls (times the simulator stopped
+"unresponsive: ..." while it is open; while connected: probes unanswered though topic frames arrive),
+reconnects, sim_losses, stalls (times the simulator stopped
 answering on an open connection), master_reregistrations, bad_frames and oversized_frames (simulator
 frames dropped: undecodable, or over --max-frame-mb / an image's max_pixels), callback_errors (a callback
 on the receive thread raised, a mission script's say; logged with its traceback), sim_time_jumps_back and

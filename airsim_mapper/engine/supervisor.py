@@ -100,6 +100,7 @@ class Supervisor:
                     break
                 if verdict.kind == LOST:
                     self.sim_lost(verdict.reason)
+                    check.reset()
                     backoff.reset()
                     next_attempt = time.monotonic() + backoff.next_delay()
                 elif verdict.kind == OK:
@@ -137,22 +138,26 @@ class Supervisor:
         return time.monotonic() - newest if newest else math.inf
 
     def _answering(self, reason: str) -> None:
-        """A probe was answered, or topic frames arrive (`reason` then says which probes went unanswered):
-        an unresponsive simulator is back, on the same connection and scene."""
+        """A probe was answered (no `reason`), or topic frames arrive while probes go unanswered (`reason`
+        counts them): an unresponsive simulator is back, on the same connection and scene."""
         with self.engine.lock:
-            since = self.stalled_since
-            if since is None:
-                if self.state == CONNECTED:
-                    self.reason = reason
-                return
+            if self.state != CONNECTED and self.stalled_since is None:
+                return  # lost: only a reconnect brings it back
+            since, before = self.stalled_since, self.reason
             self.stalled_since = None
             self.state, self.reason = CONNECTED, reason
-        how = "its topic frames arrive; its probes not yet" if reason else "a probe was answered"
-        log.warning(
-            "simulator answers again after %.1f s (%s); its scene kept running, nothing reloaded",
-            time.monotonic() - since,
-            how,
-        )
+        if since is not None:
+            log.warning(
+                "simulator answers again after %.1f s (%s); its scene kept running, nothing reloaded",
+                time.monotonic() - since,
+                "its topic frames arrive; its probes not yet" if reason else "a probe was answered",
+            )
+        elif bool(reason) == bool(before):
+            return  # no news: the status loop sends the count
+        elif reason:
+            log.warning("simulator sends topic frames but answers no requests (%s)", reason)
+        else:
+            log.warning("simulator answers requests again")
         self.publish_status()
 
     def sim_lost(self, reason: str) -> None:

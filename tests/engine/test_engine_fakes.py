@@ -3,6 +3,8 @@ seconds (no simulator, no ROS master)."""
 
 from __future__ import annotations
 
+import threading
+
 import pytest
 from fakes import IMU_MESSAGE, EngineRig
 from harness import SIM_CONFIG, wait_until
@@ -66,6 +68,37 @@ def test_a_silent_simulator_is_stale_then_answers_again_without_a_reload(rig: En
     rig.links[0].answering = True
     wait_until(lambda: rig.engine.state == CONNECTED, 10, what="the simulator answering again")
     assert len(rig.links) == 1 and rig.worlds == [SCENE] and rig.engine.counters["reconnects"] == 0
+
+
+def test_topic_frames_end_a_stall_as_an_answer_does_and_the_reason_names_the_probes_still_unanswered(
+    rig: EngineRig,
+):
+    rig.engine.load_scene(SCENE)
+    rig.ros.publishers[IMU_ROS].subscribers(1)
+    link = rig.links[0]
+    link.answering = False
+    wait_until(lambda: rig.engine.state == STALE, 10, what="the stall")
+    flowing = threading.Event()
+
+    def simulator_sending() -> None:  # the topics connection is back, the probes' one not yet
+        while not flowing.wait(0.05):
+            link.deliver(IMU_SIM, IMU_MESSAGE)
+
+    sender = threading.Thread(target=simulator_sending)
+    sender.start()
+    try:
+        wait_until(lambda: rig.statuses()[-1]["state"] == CONNECTED, 10, what="connected at the frames")
+        assert "but topic frames arrive" in rig.statuses()[-1]["reason"]
+        link.answering = True
+        wait_until(lambda: rig.engine.reason == "", 10, what="the reason cleared by an answer")
+    finally:
+        flowing.set()
+        sender.join()
+    assert rig.engine.state == CONNECTED and rig.engine.counters["stalls"] == 1
+    assert len(rig.links) == 1 and rig.engine.counters["reconnects"] == 0
+    link.answering = False  # and with the frames stopped too, it is a stall again
+    wait_until(lambda: rig.engine.state == STALE, 10, what="the second stall")
+    assert rig.engine.counters["stalls"] == 2
 
 
 def test_shutdown_stops_every_bridge_and_says_so():

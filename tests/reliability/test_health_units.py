@@ -13,8 +13,12 @@ from harness import free_port
 from airsim_mapper.cli.node import connect
 from airsim_mapper.convert import registry
 from airsim_mapper.engine.health import (
+    FRAMES_FRESH_S,
     LOST,
     OK,
+    PROBE_MISSES,
+    PROBE_PERIOD_S,
+    PROBE_TIMEOUT_S,
     UNRESPONSIVE,
     Backoff,
     HealthCheck,
@@ -71,12 +75,14 @@ def test_topic_frames_arriving_while_probes_go_unanswered_are_no_stall_and_the_v
     """After a network outage the topics connection may flow seconds before the probes' one recovers."""
     check = HealthCheck()
     link = FakeLink(answers=[False] * 7 + [True])
-    ages = [math.inf, math.inf, math.inf, math.inf, 0.2, 2.9, 3.1, 9.0]  # seconds, at each check
+    ages = [math.inf, math.inf, math.inf, math.inf, 0.2, 1.4, 1.6, 9.0]  # seconds, at each check
     verdicts = [check.check(link, lambda age=age: age) for age in ages]
     assert [v.kind for v in verdicts] == [OK, OK, UNRESPONSIVE, UNRESPONSIVE, OK, OK, UNRESPONSIVE, OK]
     assert verdicts[4] == Verdict(OK, "no answer to 5 probes of 1 s, but topic frames arrive")
     assert verdicts[6].reason == "no answer to 7 probes of 1 s; the connection is open"
     assert verdicts[7] == Verdict(OK)
+    # a frozen simulator's last frame is at least PROBE_MISSES - 1 checks old at the PROBE_MISSES-th miss
+    assert FRAMES_FRESH_S <= 0.5 * (PROBE_MISSES - 1) * (PROBE_TIMEOUT_S + PROBE_PERIOD_S)
 
 
 def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable():
