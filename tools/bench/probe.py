@@ -2,8 +2,11 @@
 
 Messages are taken as `rospy.AnyMsg` (no deserialisation: the probe costs as little as possible); the
 stamp is read from the serialised header (seq, secs, nsecs are its first 12 bytes), so every stamped type
-works. It waits until every topic delivered once, lets them run for --warmup s, prints `measuring`,
-records for --duration s, prints `done` and writes its JSON result to --out.
+works. Every message delivered is counted: with a `queue_size`, rospy keeps only the newest of the
+messages one read of the socket brings, so a probe that fell behind by one pose would drop the older
+one, from the rate and from the latencies alike. It waits until every topic delivered once, lets them
+run for --warmup s, prints `measuring`, records for --duration s, prints `done` and writes its JSON
+result to --out.
 
     python -m tools.bench.probe --out result.json [--warmup S] [--duration S] TOPIC...
 """
@@ -76,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
             rospy.AnyMsg,
             callback,
             callback_args=topic,
-            queue_size=1,
+            queue_size=None,
             buff_size=SOCKET_BUFFER,
             tcp_nodelay=True,
         )
