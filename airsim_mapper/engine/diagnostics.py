@@ -122,7 +122,8 @@ class Diagnostics:
         self._seen = {name: _Seen(b.stats.messages, b.stats.errors, now) for name, b in bridges}
 
     def connection_status(self, now: float | None = None) -> dict[str, Any]:
-        """The simulator entry: ERROR while not connected, WARN for a while after sim time went back."""
+        """The simulator entry: ERROR while not connected; WARN while connected with a reason (topic frames
+        arrive, requests go unanswered) and for a while after sim time went back."""
         now = time.monotonic() if now is None else now
         state = getattr(self.engine, "state", "connected")
         reason = getattr(self.engine, "reason", "")
@@ -133,8 +134,8 @@ class Diagnostics:
         level, message = OK, state if not reason else f"{state}: {reason}"
         if state != "connected":
             level = ERROR
-        elif jumped:
-            level, message = WARN, f"{message}; {jumped}"
+        elif reason or jumped:
+            level, message = WARN, f"{message}; {jumped}" if jumped else message
         return {
             "name": f"{self.prefix}simulator",
             "level": level,

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from airsim_mapper.engine.diagnostics import OK, Diagnostics
+from airsim_mapper.engine.diagnostics import ERROR, OK, Diagnostics
 from airsim_mapper.engine.sim_link import FrameCounts
 
 
 def diagnostics(**engine: object) -> Diagnostics:
     made = Diagnostics.__new__(Diagnostics)  # no ROS: only the pure report is used
-    made.engine = SimpleNamespace(state="connected", reason="", scene=None, bridges={}, **engine)
+    connected = {"state": "connected", "reason": "", "scene": None, "bridges": {}}
+    made.engine = SimpleNamespace(**{**connected, **engine})
     made.prefix = "node: "
     return made
 
@@ -33,6 +34,15 @@ def test_a_recent_jump_back_in_sim_time_is_a_warning_on_the_simulator_entry():
     assert status["message"] == "connected; simulation time went back 5.000 s 1 s ago (1 jumps back in all)"
     assert status["values"]["sim_time_jumps_back"] == "1"
     assert diagnostics(sim_time=watch).connection_status(now=100.0)["level"] == OK
+
+
+def test_requests_unanswered_while_topic_frames_arrive_are_a_warning_on_the_simulator_entry():
+    from airsim_mapper.engine.diagnostics import WARN
+
+    reason = "no answer to 4 probes of 1 s, but topic frames arrive"
+    status = diagnostics(reason=reason).connection_status()
+    assert status["level"] == WARN and status["message"] == f"connected: {reason}"
+    assert diagnostics(state="stale", reason="unresponsive").connection_status()["level"] == ERROR
 
 
 class Publisher:
