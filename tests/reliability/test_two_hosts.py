@@ -164,6 +164,9 @@ def test_a_node_on_another_host_streams_through_delay_and_loss_and_outlives_a_li
     wait_until(lambda: between(records(probe), 0, up, 1e12), 60, what="poses after the link came back")
     back = between(records(probe), 0, up, 1e12)[0][0]
     wait_until(lambda: "nothing reloaded" in node.output(), 10.0, what="the node to see the simulator again")
+    # the requests' connection comes back too, on its own backoff (the status's reason clears)
+    bound = max(up + RECOVERY_S - time.monotonic(), 1.0)
+    wait_until(lambda: statuses(status)[-1]["reason"] == "", bound, what="a health probe answered")
     time.sleep(5.0)
     end = time.monotonic()
     rows = records(probe)
