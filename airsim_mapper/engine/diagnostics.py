@@ -135,7 +135,9 @@ class Diagnostics:
         if state != "connected":
             level = ERROR
         elif reason or jumped:
-            level, message = WARN, f"{message}; {jumped}" if jumped else message
+            level = WARN
+            if jumped:
+                message = f"{message}; {jumped}"
         return {
             "name": f"{self.prefix}simulator",
             "level": level,

@@ -66,15 +66,11 @@ class StreamHub:
     def sim_now(self) -> int:
         """The simulator's time as far as the streams know it: the newest time_stamp (ns) seen on any
         (0 before any)."""
-        with self._lock:
-            streams = list(self._streams.values())
-        return max((s.stats.newest_stamp for s in streams), default=0)
+        return max((s.stats.newest_stamp for s in self.streams().values()), default=0)
 
     def newest_arrival(self) -> float:
         """When the newest message arrived on any stream (time.monotonic(); 0 before any)."""
-        with self._lock:
-            streams = list(self._streams.values())
-        return max((s.stats.last_receive for s in streams), default=0.0)
+        return max((s.stats.last_receive for s in self.streams().values()), default=0.0)
 
     def forget_stamps(self) -> None:
         """A new simulator session: the old session's newest stamps no longer say what is stale. Called

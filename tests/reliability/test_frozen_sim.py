@@ -109,15 +109,9 @@ def test_a_short_stall_neither_reloads_the_scene_nor_silences_status_and_diagnos
     last = reports[-1]
     assert last["state"] == "connected" and last["reconnects"] == 0, json.dumps(last)
     assert "simulator back" not in node.output()[mark:] and "answers again" in node.output()[mark:]
-    for name, times in (("status", _status_times(status)), ("diagnostics", stamps(diagnostics))):
+    for name, times in (("status", stamps(status, "STATUST")), ("diagnostics", stamps(diagnostics))):
         during = [t for t in times if stopped - 1.0 <= t <= resumed + 1.0]
         gaps = [b - a for a, b in zip(during, during[1:])]
         assert during and max(gaps, default=0.0) < 2.0, (name, gaps)
         assert during[0] < stopped + 1.5 and during[-1] > resumed - 1.5, (name, during, stopped, resumed)
     assert node.alive()
-
-
-def _status_times(status: Child) -> list[float]:
-    """Receive times of the status probe's lines (it prints STATUS lines without times: use the log's
-    own per-line stamps)."""
-    return [float(line.split()[1]) for line in status.output().splitlines() if line.startswith("STATUST ")]

@@ -25,7 +25,7 @@ import pytest
 from harness import Child, Rig, SimPorts, wait_until
 
 from airsim_mapper.engine.health import PROBE_PERIOD_S, PROBE_TIMEOUT_S
-from reliability.relkit import PROBE, PROJECT_SIM_CONFIG, ROBOT, SCENE, statuses, wait_output
+from reliability.relkit import PROBE, PROJECT_SIM_CONFIG, ROBOT, SCENE, stamps, statuses, wait_output
 from tools.rig import NODE_SCRIPT, ros_environment
 
 WIRE = Path(__file__).resolve().parent / "wire.py"
@@ -85,9 +85,7 @@ def records(probe: Child) -> list[tuple[int, float, float]]:
 
 def timed_statuses(status: Child) -> list[tuple[float, dict]]:
     """(wall time, status) of every status message a `probe.py status` printed."""
-    lines = status.output().splitlines()
-    times = [float(line.split()[1]) for line in lines if line.startswith("STATUST ")]
-    return list(zip(times, statuses(status)))
+    return list(zip(stamps(status, "STATUST"), statuses(status)))
 
 
 def between(rows: list[tuple[int, float, float]], index: int, start: float, end: float) -> list[tuple]:

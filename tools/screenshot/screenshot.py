@@ -177,9 +177,11 @@ class RvizStack:
     display: str = ""
     sim_ports: SimPorts = field(default_factory=lambda: SimPorts(0, 0))  # the headless server's, once started
     rig: Rig = field(init=False)
+    background: tuple[int, int, int] = field(init=False)  # the config's 3D background colour
 
     def __post_init__(self) -> None:
         self.rig = Rig(self.workdir, cwd=self.workdir)
+        self.background = config_background()
 
     def __enter__(self) -> RvizStack:
         try:
@@ -300,14 +302,14 @@ class RvizStack:
     def drawn(self) -> bool:
         """RViz has drawn its 3D view once: the config's background colour is on the screen (before
         llvmpipe's first frame the view is black)."""
-        return background_share(read_xwd(self.framebuffer), config_background()) > 0
+        return background_share(read_xwd(self.framebuffer), self.background) > 0
 
     def capture(self, out: Path) -> dict[str, float]:
         """The X screen as a PNG; returns its image statistics."""
         rgb = read_xwd(self.framebuffer)
         out.parent.mkdir(parents=True, exist_ok=True)
         write_png(out, rgb)
-        return {**image_stats(rgb), "background": background_share(rgb, config_background())}
+        return {**image_stats(rgb), "background": background_share(rgb, self.background)}
 
     def stop(self) -> None:
         """SIGINT (roslaunch then stops its nodes), wait, then SIGKILL whatever is left of each tree."""
