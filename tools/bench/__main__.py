@@ -44,19 +44,24 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
     load = bench.scene("load", 1, scenes.CameraSetup(1920, 1080, 1 / 60.0, (0,)))
     hd = bench.scene("hd720", 1, scenes.CameraSetup(1280, 720, 1 / CAMERA_HZ, (0,)))
     camera_topics = [scenes.image_topic(1), scenes.pose_topic(1)]
+    image_only, pose_only = camera_topics[:1], camera_topics[1:]
 
     def profile(name: str) -> str | None:
         return str(profile_dir / f"bridge_{name}.prof") if profile_dir else None
 
     with bench.bridge_session(single, profile=profile("camera")) as session:
-        out["pose"]["idle"] = session.probe("pose_idle", [scenes.pose_topic(1)])
+        out["pose"]["idle"] = session.probe("pose_idle", pose_only)
         # the camera at its nominal 30 Hz, with pose measured alongside: pose under nominal camera load
         out["bridge"]["camera"] = session.probe("camera", camera_topics)
+        # the same with the images read by another subscriber process, as another node of a ROS graph
+        out["bridge"]["camera_apart"] = session.probe("camera_apart", pose_only, apart=image_only)
     # The floor: the same frames through the client's own receive loop into plain rospy publishers.
     with bench.forwarder_session(single) as session:
-        floor["pose_idle"] = session.probe("forwarder_pose_idle", [scenes.pose_topic(1)])
+        floor["pose_idle"] = session.probe("forwarder_pose_idle", pose_only)
     with bench.forwarder_session(single, camera=True) as session:
         floor["camera"] = session.probe("forwarder_camera", camera_topics)
+        floor["camera_apart"] = session.probe("forwarder_camera_apart", pose_only, apart=image_only)
+    out["receive_floor"]["camera"] = bench.receive_floor(single, camera=True)
     with bench.bridge_session(hd) as session:
         out["bridge"]["camera_720p"] = session.probe("camera_720p", camera_topics)
     with bench.forwarder_session(hd, camera=True) as session:

@@ -47,9 +47,10 @@ class Session:
     node: Child
     role: str = "bridge"  # the node's name in the results: bridge, or forwarder (the floor)
 
-    def probe(self, label: str, topics: Sequence[str]) -> dict[str, Any]:
-        """Rate and latency of `topics`, with the CPU (cores) and RSS of the node and server meanwhile."""
-        return self.bench.measure(label, topics, {self.role: self.node, "server": self.server})
+    def probe(self, label: str, topics: Sequence[str], apart: Sequence[str] = ()) -> dict[str, Any]:
+        """Rate and latency of `topics`, with the CPU (cores) and RSS of the node and server meanwhile;
+        `apart` topics are read by a second probe process at the same time (see `Bench.measure`)."""
+        return self.bench.measure(label, topics, {self.role: self.node, "server": self.server}, apart)
 
 
 @dataclass
@@ -72,25 +73,32 @@ class Bench:
 
     # -- measuring
 
-    def measure(self, label: str, topics: Sequence[str], watched: dict[str, Child]) -> dict[str, Any]:
-        out = self.workdir / f"probe_{label}.json"
-        probe = self.module(
-            f"probe_{label}",
-            "tools.bench.probe",
-            "--out",
-            str(out),
-            "--warmup",
-            str(self.warmup_s),
-            "--duration",
-            str(self.duration_s),
-            "--first-timeout",
-            str(FIRST_MESSAGE_TIMEOUT_S),
-            *topics,
-        )
+    def measure(
+        self, label: str, topics: Sequence[str], watched: dict[str, Child], apart: Sequence[str] = ()
+    ) -> dict[str, Any]:
+        """The probe's result for `topics`. The `apart` topics (images, say) are read by a second probe
+        process over the same window, their figures merged in: a subscriber of the others that does not
+        also take the GIL to read large messages, as a ROS graph where each node reads its own topics."""
+        probe, out = self._probe(label, topics)
+        other = self._probe(f"{label}_apart", apart) if apart else None
         try:
-            return self._collect(probe, out, watched)
+            result = self._collect(probe, out, watched)
+            if other is not None:
+                wait_line(other[0], "done", self.duration_s + 30)
+                wait_until(other[1].exists, 10, f"{other[1].name}")
+                time.sleep(0.1)
+                result["topics"].update(json.loads(other[1].read_text())["topics"])
+            return result
         finally:
             self.procs.stop(probe)
+            if other is not None:
+                self.procs.stop(other[0])
+
+    def _probe(self, label: str, topics: Sequence[str]) -> tuple[Child, Path]:
+        out = self.workdir / f"probe_{label}.json"
+        args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(self.duration_s)]
+        args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), *topics]
+        return self.module(f"probe_{label}", "tools.bench.probe", *args), out
 
     def _collect(self, measurer: Child, out: Path, watched: dict[str, Child]) -> dict[str, Any]:
         """The JSON result `measurer` writes to `out` between its `measuring` and `done` lines, with the
