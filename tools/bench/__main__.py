@@ -142,6 +142,9 @@ def main(argv: list[str] | None = None) -> int:
         f"results: {out} ({results['seconds']:.0f} s); load average {machine['load_average_at_start']:.1f} "
         f"at start, {machine['load_average_at_end']:.1f} at end, on {machine['cpus']} cores"
     )
+    slow = report.floor_over_target(results.get("e2e", {}))
+    if slow:
+        print(slow)
     # Only the start counts: at the end the load average includes the bench's own processes.
     if machine["load_average_at_start"] > (machine["cpus"] or 1) / 2:
         print(

@@ -110,6 +110,16 @@ def test_the_pose_latency_targets_name_the_forwarder_and_the_receive_floor():
     assert not any("no ROS" in t["note"] for t in report.floor_targets(e2e))
 
 
+def test_a_receive_floor_over_the_drones_latency_target_is_called_out():
+    e2e = _e2e()
+    assert report.floor_over_target(e2e) is None  # not measured
+    e2e["receive_floor"] = {"scale": _result("receiver", 0.05, {scenes.pose_topic(1): (100.0, 3.9)})}
+    assert report.floor_over_target(e2e) is None
+    e2e["receive_floor"]["scale"]["topics"][scenes.pose_topic(2)] = {"rate_hz": 100.0, "latency_p99_ms": 8.8}
+    warning = report.floor_over_target(e2e)
+    assert warning is not None and "8.80 ms, over the 4 ms target" in warning
+
+
 @pytest.mark.live
 def test_the_receive_floor_takes_every_robots_poses_without_ros(tmp_path):
     bench = Bench(tmp_path, warmup_s=0.5, duration_s=2.0)
