@@ -43,8 +43,8 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
     single = bench.scene("single", 1, scenes.CameraSetup(1920, 1080, 1 / CAMERA_HZ, (0, 1)), lidar=True)
     load = bench.scene("load", 1, scenes.CameraSetup(1920, 1080, 1 / 60.0, (0,)))
     hd = bench.scene("hd720", 1, scenes.CameraSetup(1280, 720, 1 / CAMERA_HZ, (0,)))
-    camera_topics = [scenes.image_topic(1), scenes.pose_topic(1)]
-    image_only, pose_only = camera_topics[:1], camera_topics[1:]
+    image_only, pose_only = [scenes.image_topic(1)], [scenes.pose_topic(1)]
+    camera_topics = image_only + pose_only
 
     def profile(name: str) -> str | None:
         return str(profile_dir / f"bridge_{name}.prof") if profile_dir else None
@@ -69,7 +69,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
     # The same idle pose stream with a mapping that drops the per-camera frames: what those frames cost.
     lean = scenes.write_mapping_without_camera_frames(bench.config_dir)
     with bench.bridge_session(single, node_args=("--mapping", str(lean))) as session:
-        out["pose"]["idle_without_camera_frames"] = session.probe("pose_idle_lean", [scenes.pose_topic(1)])
+        out["pose"]["idle_without_camera_frames"] = session.probe("pose_idle_lean", pose_only)
     with bench.bridge_session(single, profile=profile("depth")) as session:
         out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
     with bench.bridge_session(single, profile=profile("lidar")) as session:

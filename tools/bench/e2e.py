@@ -22,6 +22,7 @@ from tools.bench.sampling import cpu_share, fault_rate, sample
 from tools.rig import Child, Rig, free_port, port_open, wait_until
 
 FIRST_MESSAGE_TIMEOUT_S = 120.0
+APART_MARGIN_S = 5.0  # how long a second probe's window outlasts the first's: the first's start-up
 
 
 class BenchError(RuntimeError):
@@ -76,29 +77,41 @@ class Bench:
     def measure(
         self, label: str, topics: Sequence[str], watched: dict[str, Child], apart: Sequence[str] = ()
     ) -> dict[str, Any]:
-        """The probe's result for `topics`. The `apart` topics (images, say) are read by a second probe
-        process over the same window, their figures merged in: a subscriber of the others that does not
-        also take the GIL to read large messages, as a ROS graph where each node reads its own topics."""
-        probe, out = self._probe(label, topics)
-        other = self._probe(f"{label}_apart", apart) if apart else None
+        """The probe's result for `topics`, with the `apart` topics (images, say) read by a second probe
+        process whose window spans the first's, their figures merged in: a subscriber of `topics` that
+        does not also hold the GIL to read large messages, as in a ROS graph where each node reads its own."""
+        if set(topics) & set(apart):
+            raise BenchError(f"topics both read together and apart: {sorted(set(topics) & set(apart))}")
+        other: tuple[Child, Path] | None = None
         try:
-            result = self._collect(probe, out, watched)
+            if apart:
+                other = self._probe(f"{label}_apart", apart, self.warmup_s + self.duration_s + APART_MARGIN_S)
+                wait_line(other[0], "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
+            probe, out = self._probe(label, topics, self.duration_s)
+            try:
+                result = self._collect(probe, out, watched)
+            finally:
+                self.procs.stop(probe)
             if other is not None:
-                wait_line(other[0], "done", self.duration_s + 30)
-                wait_until(other[1].exists, 10, f"{other[1].name}")
-                time.sleep(0.1)
-                result["topics"].update(json.loads(other[1].read_text())["topics"])
+                wait_line(other[0], "done", self.warmup_s + self.duration_s + APART_MARGIN_S + 30)
+                result["topics"].update(self._result(other[1])["topics"])
             return result
         finally:
-            self.procs.stop(probe)
             if other is not None:
                 self.procs.stop(other[0])
 
-    def _probe(self, label: str, topics: Sequence[str]) -> tuple[Child, Path]:
+    def _probe(self, label: str, topics: Sequence[str], duration_s: float) -> tuple[Child, Path]:
         out = self.workdir / f"probe_{label}.json"
-        args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(self.duration_s)]
+        args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(duration_s)]
         args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), *topics]
         return self.module(f"probe_{label}", "tools.bench.probe", *args), out
+
+    @staticmethod
+    def _result(out: Path) -> dict[str, Any]:
+        """The JSON a measuring process writes once it has printed `done`."""
+        wait_until(out.exists, 10, f"{out.name}")
+        time.sleep(0.1)
+        return json.loads(out.read_text())
 
     def _collect(self, measurer: Child, out: Path, watched: dict[str, Child]) -> dict[str, Any]:
         """The JSON result `measurer` writes to `out` between its `measuring` and `done` lines, with the
@@ -107,9 +120,7 @@ class Bench:
         before = {name: sample(child.pid) for name, child in watched.items()}
         wait_line(measurer, "done", self.duration_s + 30)
         after = {name: sample(child.pid) for name, child in watched.items()}
-        wait_until(out.exists, 10, f"{out.name}")
-        time.sleep(0.1)
-        result = json.loads(out.read_text())
+        result = self._result(out)
         for name in watched:
             result[f"{name}_cpu_cores"] = cpu_share(before[name], after[name])
             result[f"{name}_rss_mb"] = after[name].rss_mb
@@ -229,7 +240,7 @@ class Bench:
                 str(out),
             )
             wait_line(receiver, "done", 60 + self.duration_s + 30)  # it measures its own CPU time
-            return json.loads(out.read_text())
+            return self._result(out)
         finally:
             if receiver is not None:
                 self.procs.stop(receiver)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tools.bench import report, scenes
-from tools.bench.e2e import Bench
+from tools.bench.e2e import Bench, BenchError
 
 POSE, IMAGE = scenes.pose_topic(1), scenes.image_topic(1)
 
@@ -86,6 +86,8 @@ def test_the_bare_forwarder_carries_pose_and_images_from_the_replay_server(tmp_p
         with bench.forwarder_session(scene, camera=True) as session:
             together = session.probe("floor", [POSE, IMAGE])
             apart = session.probe("floor_apart", [POSE], apart=[IMAGE])  # the image only through the other
+            with pytest.raises(BenchError, match="both read together and apart"):
+                session.probe("floor_twice", [POSE, IMAGE], apart=[IMAGE])
     finally:
         bench.close()
     for result in (together, apart):
@@ -105,7 +107,7 @@ def test_the_pose_latency_targets_name_the_forwarder_and_the_receive_floor():
     assert "bridge 3.00 ms, bare forwarder 3.00 ms" in drones and "no ROS: 2.50 ms" in drones
     camera = rows["pose p99 under a 1080p camera @30 / the forwarder's"]
     assert "bridge 6.00 ms, bare forwarder 10.00 ms" in camera and "no ROS: 4.50 ms" in camera
-    assert "images read by another process: 0.50x, bridge 4.00 ms, bare forwarder 8.00 ms" in camera
+    assert "images read apart: 0.50x, bridge 4.00 ms, bare forwarder 8.00 ms" in camera
     del e2e["receive_floor"]
     assert not any("no ROS" in t["note"] for t in report.floor_targets(e2e))
 
