@@ -284,18 +284,17 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
     received = e2e.get("receive_floor", {})
     if "camera" in pairs:
         ours, floor = pairs["camera"]
-        ratio = _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])
         note = _p99_note(ours, floor, received.get("camera"))
         if "camera_apart" in pairs:  # a figure beside the target, which stays judged on the one probe
-            ours, floor = pairs["camera_apart"]
-            ratio_apart = _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])
-            note += f"; images read apart: {_x(ratio_apart)}, {_p99_note(ours, floor)}"
+            apart = pairs["camera_apart"]
+            note += f"; images read apart: {_x(_p99_ratio(*apart))}, {_p99_note(*apart)}"
+        ratio = _p99_ratio(ours, floor)
         out.append(_limit("pose p99 under a 1080p camera @30 / the forwarder's", ratio, 0.8, "x", note))
     if "camera_load" in pairs:
         ours, floor = pairs["camera_load"]
         rate = _worst_pose(ours)[0]
         out.append(_target("pose rate under a 1080p camera @60", rate, 98.0, rate >= 98.0, "Hz"))
-        ratio = _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])
+        ratio = _p99_ratio(ours, floor)
         out.append(_limit("pose p99 under a 1080p camera @60 / the forwarder's", ratio, 1.0, "x"))
     if "scale" in pairs:
         ours, floor = pairs["scale"]
@@ -311,13 +310,19 @@ def floor_over_target(e2e: dict[str, Any]) -> str | None:
     """A warning when the receive floor alone (no ROS) missed the drones' pose latency target: then the
     host was too slow during the run for any bridge to meet it, and the ratios are the figures to read."""
     received = e2e.get("receive_floor", {}).get("scale")
-    if not received or _worst_pose(received)[1] <= SCALE_POSE_P99_MS:
+    p99 = _worst_pose(received)[1] if received else 0.0
+    if p99 <= SCALE_POSE_P99_MS:
         return None
     return (
-        f"warning: the poses through the receive loop alone, no ROS, had a worst p99 of "
-        f"{_ms(_worst_pose(received)[1])} ms, over the {SCALE_POSE_P99_MS:g} ms target: the host was too "
-        "slow for that target during this run, whatever the bridge does"
+        f"warning: the poses through the receive loop alone, no ROS, had a worst p99 of {_ms(p99)} ms, "
+        f"over the {SCALE_POSE_P99_MS:g} ms target: the host was too slow for that target during this "
+        "run, whatever the bridge does"
     )
+
+
+def _p99_ratio(ours: dict[str, Any], floor: dict[str, Any]) -> float | None:
+    """The bridge's worst pose p99 over the bare forwarder's."""
+    return _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])
 
 
 def _p99_note(ours: dict[str, Any], floor: dict[str, Any], received: dict[str, Any] | None = None) -> str:
