@@ -97,7 +97,7 @@ def test_the_bare_forwarder_carries_pose_and_images_from_the_replay_server(tmp_p
         assert result["forwarder_cpu_cores"] > 0 and result["server_cpu_cores"] > 0
 
 
-def test_the_pose_latency_targets_name_the_forwarder_and_the_receive_floor():
+def test_the_drones_and_pose_latency_targets_name_the_forwarder_and_the_receive_floor():
     e2e = _e2e()
     poses = {scenes.pose_topic(i): (100.0, 2.5) for i in (1, 2)}
     e2e["receive_floor"] = {"scale": _result("receiver", 0.05, poses)}
@@ -108,8 +108,15 @@ def test_the_pose_latency_targets_name_the_forwarder_and_the_receive_floor():
     camera = rows["pose p99 under a 1080p camera @30 / the forwarder's"]
     assert "bridge 6.00 ms, bare forwarder 10.00 ms" in camera and "no ROS: 4.50 ms" in camera
     assert "images read apart: 0.50x, bridge 4.00 ms, bare forwarder 8.00 ms" in camera
+    assert (
+        rows["2 drones: bridge CPU"]
+        == "bare forwarder 0.100 cores; the bridge's receive loop alone, no ROS: 0.050 cores"
+    )
     del e2e["receive_floor"]
     assert not any("no ROS" in t["note"] for t in report.floor_targets(e2e))
+    assert {t["target"]: t["note"] for t in report.floor_targets(e2e)}["2 drones: bridge CPU"] == (
+        "bare forwarder 0.100 cores"
+    )
 
 
 def test_a_receive_floor_over_the_drones_latency_target_is_called_out():
