@@ -105,7 +105,10 @@ class ProjectAirSimWrapper:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
             client = client_factory()
         self.sim_config_path = str(sim_config_path)
-        name = node_name if node_name is not None else rospy.get_name().rsplit("/", 1)[-1]
+        # The status topic and diagnostics go by the ROS node's full name, unique on the master (so that
+        # /sim1/projectairsim and /sim2/projectairsim differ); the mapping's <node_name> is its last part.
+        ros_name = rospy.get_name()
+        name = node_name if node_name is not None else ros_name.rsplit("/", 1)[-1]
         # As a ROS name: "sim1" below the node's namespace (ROS_NAMESPACE, <group ns>, __ns:=); "/sim1" as is
         namespace = resolve_namespace(namespace, rospy.get_namespace())
         self.namespace = namespace
@@ -118,9 +121,10 @@ class ProjectAirSimWrapper:
             client_factory=client_factory,
             tune=tune_process,
             frame_counts=FrameCounts(max_frame_bytes=int(max_frame_mb * 1024 * 1024)),
+            ros_name=ros_name,
         )
         self.master_watch = MasterWatch()
-        self.diagnostics = Diagnostics(self.engine, name)
+        self.diagnostics = Diagnostics(self.engine, ros_name)
         self._closed = False
         rospy.on_shutdown(self.shutdown)
         self.engine.start_node_bridges()  # load_scene is there before (and without) any scene

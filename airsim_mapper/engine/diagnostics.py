@@ -92,7 +92,7 @@ class Diagnostics:
         from diagnostic_msgs.msg import DiagnosticArray
 
         self.engine = engine
-        self.prefix = f"{node_name}: "
+        self.prefix = f"{node_name.strip('/')}: "
         self.period_s = period_s
         self.publisher = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=1)
         self._seen: dict[str, _Seen] = {}

@@ -65,6 +65,7 @@ class Engine:
         ros: RosLink | None = None,
         link: Callable[[Any, FrameCounts], SimLink] = SimLink,
         frame_counts: FrameCounts | None = None,
+        ros_name: str | None = None,
     ) -> None:
         if tune:
             tune_process()
@@ -74,7 +75,8 @@ class Engine:
         self.client = client
         self.mapping = mapping
         self.sim_config_path = str(sim_config_path)
-        self.node_name = node_name
+        self.node_name = node_name  # the mapping's <node_name>
+        self.ros_name = ros_name or node_name  # the node's ROS name: its status topic's, diagnostics' name
         self.namespace = namespace
         self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
         self._link = link

@@ -1,4 +1,5 @@
-"""The node's status topic: `/airsim_mapper/<node>/status`, a latched std_msgs/String holding JSON.
+"""The node's status topic: `/airsim_mapper/<node>/status` (`<node>` its full ROS name), a latched
+std_msgs/String holding JSON.
 
 Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
 "unresponsive: ..." while it is open; while connected: probes unanswered though topic frames arrive),

@@ -25,7 +25,8 @@ PRIVATE_SERVICES = ("reload_mapping", "get_loggers", "set_logger_level")
 
 
 def status_topic(node_name: str) -> str:
-    """The node's status topic (a latched std_msgs/String of JSON)."""
+    """The status topic (a latched std_msgs/String of JSON) of the node `node_name`, its full ROS name:
+    `/airsim_mapper/sim1/bridge/status` for the node /sim1/bridge."""
     return f"/airsim_mapper/{node_name.strip('/')}/status"
 
 
@@ -39,7 +40,7 @@ def node_names(node_name: str, namespace: str = "", clock_rule: bool = False) ->
     for prefix in dict.fromkeys(("", namespace.rstrip("/"))):
         for service in PRIVATE_SERVICES:
             owned[f"{prefix}/{node}/{service}"] = f"the node's private service ~{service}"
-    owned[status_topic(node)] = "the node's status topic (std_msgs/String)"
+        owned[status_topic(f"{prefix}/{node}")] = "the node's status topic (std_msgs/String)"
     return owned
 
 

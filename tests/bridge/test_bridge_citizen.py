@@ -153,7 +153,8 @@ LAUNCH = """<launch>
 
 def test_roslaunch_group_ns_with_defaults_then_load_a_scene(rig_factory, tmp_path):
     """The shipped launch file in <group ns>, its defaults (no scene): load_scene under the group, then a
-    scene loaded on it brings the robots' topics up under the group."""
+    scene loaded on it brings the robots' topics up under the group; status and diagnostics name the node
+    in full."""
     rig = rig_factory()
     launch = tmp_path / "fleet.launch"
     launch.write_text(LAUNCH.format(topics=rig.sim.ports.topics, services=rig.sim.ports.services))
@@ -164,6 +165,18 @@ def test_roslaunch_group_ns_with_defaults_then_load_a_scene(rig_factory, tmp_pat
     wait_topic("/fleet/airsim_node/Drone1/DownCamera/scene_camera/image", roslaunch)
     assert "setting scene = '' (parameter ~scene)" in roslaunch.output()
     lookup("fleet/map", "fleet/airsim_node/Drone1")
+    # The status topic and the diagnostics go by the node's full name: another group's node differs.
+    import json
+
+    import rospy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from std_msgs.msg import String
+
+    status = rospy.wait_for_message("/airsim_mapper/fleet/group_bridge/status", String, timeout=20)
+    assert json.loads(status.data)["state"] == "connected"
+    names = {s.name for s in rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=20).status}
+    assert "fleet/group_bridge: mapping" in names
+    assert all(name.startswith("fleet/group_bridge: ") for name in names), names
     rig.launcher.stop_all()
 
 

@@ -58,6 +58,13 @@ def test_the_status_topic_is_the_nodes_own(scene):
     )
     with pytest.raises(MappingError, match="belongs to the node's status topic"):
         expand(mapping, scene, "bridge")
+    # a node in a namespace has its full name in its status topic
+    grouped = load_mapping_text(
+        "version: 1\nrules:\n" + pose_rule("mine", "/airsim_mapper/sim1/bridge/status")
+    )
+    with pytest.raises(MappingError, match="belongs to the node's status topic"):
+        expand(grouped, scene, "bridge", "/sim1")
+    assert expand(grouped, scene, "bridge")  # free for a node in the root namespace
 
 
 def test_clock_is_the_clock_rules_while_it_is_on_and_free_without_it(scene):
