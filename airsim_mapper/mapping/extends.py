@@ -49,10 +49,15 @@ def _merge(base: Any, over: Any) -> Any:
     return copy.deepcopy(over)
 
 
+def is_bare_name(spec: str) -> bool:
+    """Whether `spec` is written as a shipped mapping's name (`enu`), not as a file."""
+    return "/" not in spec and "\\" not in spec and not spec.endswith((".yaml", ".yml"))
+
+
 def base_path(spec: str, file: str) -> Path:
     """The file `extends: spec` in `file` names: a shipped mapping for a bare name, else a path relative to
     the extending file's folder (the working directory for a mapping given as text)."""
-    if "/" not in spec and "\\" not in spec and not spec.endswith((".yaml", ".yml")):
+    if is_bare_name(spec):
         return MAPPINGS_DIR / f"{spec}{MAPPING_SUFFIX}"
     path = Path(spec).expanduser()
     if path.is_absolute() or file.startswith("<"):
@@ -60,17 +65,18 @@ def base_path(spec: str, file: str) -> Path:
     return Path(file).parent / path
 
 
+def shipped_hint(spec: str) -> str:
+    """What to say of a shipped mapping name that does not exist: the close one, or the list."""
+    shipped = ", ".join(shipped_mappings())
+    return did_you_mean(spec, shipped_mappings()) or f" (shipped: {shipped}; a file is written ./{spec}.yaml)"
+
+
 def _read_base(spec: str, origins: Origins, chain: tuple[Path, ...], limits: YamlLimits | None):
     """Load the base `spec` named at ('extends',) of the top document of `chain`."""
     here = origins.file_of(("extends",))
-    bare = "/" not in spec and "\\" not in spec and not spec.endswith((".yaml", ".yml"))
     path = base_path(spec, here)
-    if bare and spec not in shipped_mappings():
-        shipped = ", ".join(shipped_mappings())
-        hint = (
-            did_you_mean(spec, shipped_mappings())
-            or f" (shipped: {shipped}; a file is written ./{spec}.yaml)"
-        )
+    if is_bare_name(spec) and spec not in shipped_mappings():
+        hint = shipped_hint(spec)
         raise MappingError([_located(origins, ("extends",), f"extends: no shipped mapping '{spec}'{hint}")])
     resolved = path.resolve()
     if resolved in chain:

@@ -15,7 +15,7 @@ from airsim_mapper.files import ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
-from airsim_mapper.mapping.extends import resolve
+from airsim_mapper.mapping.extends import is_bare_name, resolve, shipped_hint
 from airsim_mapper.mapping.match import selections_of
 from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
 from airsim_mapper.mapping.origins import Origins, file_of, located
@@ -35,15 +35,16 @@ def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
     resources.mapping_path); raise MappingError with every problem found.
 
     `limits` bounds the file's size and its alias expansion (generous defaults)."""
-    path = mapping_path(path)
+    spec, path = str(path), mapping_path(path)
     file = str(path)
     limits = limits or YamlLimits()
     try:
         text = read_config_text(path, limit=limits.max_bytes)
     except ConfigFileError as err:
-        raise MappingError.single(
-            file, err.about("mapping file"), err.line, err.column, unreadable=err.unreadable
-        ) from None
+        message = err.about("mapping file")
+        if err.unreadable and is_bare_name(spec) and not path.exists():  # `enuu`: a shipped name mistyped?
+            message += shipped_hint(spec)
+        raise MappingError.single(file, message, err.line, err.column, unreadable=err.unreadable) from None
     return load_mapping_text(text, file, limits)
 
 

@@ -102,6 +102,22 @@ def test_an_unreadable_mapping_file_exits_2_naming_the_file(tmp_path, capsys):
     )
 
 
+def test_a_mistyped_shipped_mapping_name_gets_a_did_you_mean(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # no file of that name here
+    assert main(["enuu"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "enuu: cannot read the mapping file: No such file or directory (did you mean 'enu'?)"
+    )
+    assert main(["zzz"]) == 2
+    assert (
+        capsys.readouterr()
+        .err.strip()
+        .endswith("No such file or directory (shipped: default, enu; a file is written ./zzz.yaml)")
+    )
+    assert main(["./enuu"]) == 2  # written as a path: no guess
+    assert capsys.readouterr().err.strip() == "enuu: cannot read the mapping file: No such file or directory"
+
+
 def test_a_missing_scene_file_exits_2_and_an_invalid_scene_exits_1(tmp_path, capsys):
     assert main([str(DEFAULT), "--scene", "absent.jsonc", "--simconfigpath", str(SIM_CONFIG)]) == 2
     assert "absent.jsonc: cannot read the scene file" in capsys.readouterr().err
