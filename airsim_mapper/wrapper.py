@@ -3,8 +3,10 @@ AirSim ROS bridge documentation describes).
 
 Call `rospy.init_node` first. Without a scene the wrapper runs the node's own bridges (load_scene) and
 waits for one. The wrapper either creates its own client (kept in `projectairsim_client`
-and disconnected at ROS shutdown) or takes one (then never disconnects it). After a mission script loads
-a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow.
+and disconnected at ROS shutdown) or takes one (then never disconnects it: the script does, and until then
+the client's receive thread keeps the process alive, as it does without the bridge). After a mission script
+loads a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow. The README's
+example shows the whole pattern (`disable_signals=True`, so that Ctrl-C also stops a running mission).
 
 Reliability: a wrapper that made its client (or was given a `client_factory`) reconnects by itself when
 the simulator restarts and reloads the last scene; with a client supplied by the mission script it only

@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pytest
 from bridgeharness import published_topics, wait_topic
 from harness import ROOT, wait_until
 
@@ -130,7 +131,8 @@ def unexpected_tracebacks(output: str) -> list[str]:
     return [block[:300] for block in blocks if "airsim_mapper" in block or "hello_ros.py" in block]
 
 
-# What the README's mission snippet leaves to the reader: its imports, the client's ports, and a mission.
+# What the README's mission snippet leaves to the reader: its imports, the client's ports, and a mission,
+# which ends at once or runs until it is stopped.
 README_MISSION_PREAMBLE = """
 import asyncio, functools, sys
 import rospy
@@ -143,6 +145,8 @@ ProjectAirSimClient = functools.partial(ProjectAirSimClient, "127.0.0.1", int(sy
 async def mission(drone):
     drone.enable_api_control()
     drone.arm()
+    print("mission started", flush=True)
+    await asyncio.sleep(float(sys.argv[3]))
     print("mission done", flush=True)
 """
 
@@ -155,21 +159,25 @@ def readme_mission_snippet() -> str:
     return section.split("```python\n", 1)[1].split("```", 1)[0]
 
 
-def test_the_readmes_mission_script_bridges_during_and_after_its_mission_and_ctrl_c_ends_it(
-    rig_factory, tmp_path
-):
+@pytest.mark.parametrize("mission_s", [0.0, 3600.0], ids=["after_the_mission", "during_the_mission"])
+def test_the_readmes_mission_script_ends_on_one_ctrl_c(rig_factory, tmp_path, mission_s):
     """The snippet as written, run from the checkout (its sim_config/): World first, then the wrapper on the
-    same client; the bridge goes on after the mission, and one Ctrl-C ends the process (the client's
-    receive thread, which runs the bridge's loop, would otherwise keep it alive)."""
-    rig = rig_factory()
-    script = tmp_path / "readme_mission.py"
-    script.write_text(README_MISSION_PREAMBLE + readme_mission_snippet())
-    ports = [str(rig.sim.topics_port), str(rig.sim.services_port)]
-    mission = rig.launcher.python("readme_mission", [str(script), *ports], cwd=ROOT)
-    wait_topic("/airsim_node/Drone1/actual_pose", mission)
-    wait_until(lambda: "mission done" in mission.output(), 30, what="the mission")
+    same client. The bridge publishes during the mission and after it, and one Ctrl-C ends the process
+    cleanly whether the mission is running or done (the client's receive thread, which runs the bridge's
+    loop, keeps a process alive until the client disconnects)."""
     import rospy
     from geometry_msgs.msg import PoseStamped
 
-    rospy.wait_for_message("/airsim_node/Drone1/actual_pose", PoseStamped, timeout=10)  # bridging on
+    rig = rig_factory()
+    script = tmp_path / "readme_mission.py"
+    script.write_text(README_MISSION_PREAMBLE + readme_mission_snippet())
+    args = [str(script), str(rig.sim.topics_port), str(rig.sim.services_port), str(mission_s)]
+    mission = rig.launcher.python("readme_mission", args, cwd=ROOT)
+    wait_topic("/airsim_node/Drone1/actual_pose", mission)
+    wait_until(lambda: "mission started" in mission.output(), 30, what="the mission")
+    if not mission_s:
+        wait_until(lambda: "mission done" in mission.output(), 30, what="the end of the mission")
+    rospy.wait_for_message("/airsim_node/Drone1/actual_pose", PoseStamped, timeout=10)  # bridging
     assert mission.stop(timeout=20) == 0, mission.output()
+    assert "Disconnected." in mission.output() and "Traceback" not in mission.output(), mission.output()
+    assert ("mission done" in mission.output()) == (not mission_s)
