@@ -3,7 +3,18 @@ take them from here, and a test checks the launch files' defaults against them. 
 
 from __future__ import annotations
 
-__all__ = ["SERVICES_PORT", "TOPICS_PORT"]
+from typing import Any
+
+__all__ = ["SERVICES_PORT", "TOPICS_PORT", "port"]
 
 TOPICS_PORT = 8989  # pub-sub (the client's Pair0 topics socket)
 SERVICES_PORT = 8990  # requests (the client's Req0 services socket)
+
+
+def port(value: Any) -> int:
+    """A TCP port number, 1-65535, as a switch or a parameter gives it: a ValueError otherwise (argparse
+    then says "invalid port value", the node "is not a valid port")."""
+    number = int(value)
+    if not 1 <= number <= 65535:
+        raise ValueError(f"{value!r} is not a port (1-65535)")
+    return number

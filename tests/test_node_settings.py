@@ -49,8 +49,21 @@ def test_the_command_line_wins_then_the_parameter_then_the_default(tmp_path, mon
 
 
 def test_a_parameter_of_the_wrong_type_is_an_error() -> None:
-    with pytest.raises(SettingError, match=r"parameter ~topicsport: 'abc' is not a valid int"):
+    with pytest.raises(SettingError, match=r"parameter ~topicsport: 'abc' is not a valid port"):
         resolve_settings(given([]), params(topicsport="abc"))
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "65536", "70000"])
+def test_a_port_out_of_range_is_refused_as_a_switch_and_as_a_parameter(value, capsys) -> None:
+    with pytest.raises(SystemExit) as exited:
+        parse_args(["--topicsport", value])
+    assert exited.value.code == 2
+    assert f"argument --topicsport: invalid port value: '{value}'" in capsys.readouterr().err
+    with pytest.raises(SettingError, match=rf"parameter ~servicesport: {int(value)} is not a valid port"):
+        resolve_settings(given([]), params(servicesport=int(value)))
+    assert (
+        resolve_settings(given(["--topicsport", "65535"]), params(servicesport=1))["servicesport"].value == 1
+    )
 
 
 def test_the_default_sim_config_falls_back_to_the_package_s_own(tmp_path, monkeypatch) -> None:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from airsim_mapper.cli.errors import SettingError
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT, port
 from airsim_mapper.resources import DEFAULT_SIM_CONFIG
 
 __all__ = ["SETTINGS", "Resolved", "Setting", "given_settings", "resolve_settings", "values"]
@@ -22,13 +22,13 @@ class Setting:
     name: str
     default: Any
     help: str
-    kind: type = str
+    kind: Callable[[Any], Any] = str  # a type, or a parser such as ports.port
 
 
 SETTINGS = (
     Setting("address", "127.0.0.1", "host running Project AirSim"),
-    Setting("topicsport", TOPICS_PORT, "Project AirSim pub-sub port", int),
-    Setting("servicesport", SERVICES_PORT, "Project AirSim services port", int),
+    Setting("topicsport", TOPICS_PORT, "Project AirSim pub-sub port", port),
+    Setting("servicesport", SERVICES_PORT, "Project AirSim services port", port),
     Setting(
         "simconfigpath",
         DEFAULT_SIM_CONFIG,

@@ -10,7 +10,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT, port
 from airsim_mapper.simserver import rendering
 from airsim_mapper.simserver.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
@@ -29,11 +29,11 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         "authentication, and the server warns)",
     )
     parser.add_argument(
-        "--topicsport", type=int, default=TOPICS_PORT, help=f"topics (Pair0) port, default {TOPICS_PORT}"
+        "--topicsport", type=port, default=TOPICS_PORT, help=f"topics (Pair0) port, default {TOPICS_PORT}"
     )
     parser.add_argument(
         "--servicesport",
-        type=int,
+        type=port,
         default=SERVICES_PORT,
         help=f"services (Rep0) port, default {SERVICES_PORT}",
     )

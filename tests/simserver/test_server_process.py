@@ -217,3 +217,13 @@ def test_the_launch_files_start_the_server_on_the_bridge_address_loopback_by_def
         sims = [node for node in launch.iter("node") if node.get("type") == "airsim_mapper_sim.py"]
         assert args["address"] == "127.0.0.1", name
         assert sims and all("--address $(arg address)" in node.get("args") for node in sims), name
+
+
+@pytest.mark.parametrize("switch", ["--topicsport", "--servicesport"])
+def test_a_port_out_of_range_is_a_usage_error(switch, capsys):
+    from airsim_mapper.simserver.cli import parse_args
+
+    with pytest.raises(SystemExit) as exited:
+        parse_args([switch, "65536"])
+    assert exited.value.code == 2
+    assert f"argument {switch}: invalid port value: '65536'" in capsys.readouterr().err
