@@ -99,6 +99,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 DEFAULT_NODE_NAME = "projectairsim"
+MASTER_POLL_S = 0.5  # how often a node started before its master asks again
 STOP_CHECK_S = 1.0  # the main loop also checks for a stop this often, should a wake-up be missed
 
 
@@ -117,6 +118,20 @@ def node_identity(nodename: str | None, argv: list[str]) -> tuple[str, str]:
     else:
         name = f"{DEFAULT_NODE_NAME}_{os.getpid()}_{int(time.time() * 1000)}"  # rospy's anonymous name
     return name, rosgraph.names.get_ros_namespace(argv=argv)
+
+
+def wait_for_master(period_s: float = MASTER_POLL_S) -> None:
+    """Return once the ROS master answers, saying once on stderr that the node waits for it (as rospy's
+    init_node would, but before anything is registered: a signal meanwhile exits at once)."""
+    import rosgraph
+
+    master = rosgraph.Master(f"/{DEFAULT_NODE_NAME}_waiting")
+    said = False
+    while not master.is_online():
+        if not said:
+            print(f"waiting for the ROS master at {rosgraph.get_master_uri()}", file=sys.stderr, flush=True)
+            said = True
+        time.sleep(period_s)
 
 
 def prepare(
@@ -187,6 +202,9 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
         print(problem, file=sys.stderr)
         return 1
 
+    # rospy.init_node would wait for a master that is not up yet with the node half made, where a signal
+    # can only be served by the stop deadline; waited for here, a signal still exits at once.
+    wait_for_master()
     # rospy runs its shutdown hooks inside its signal handler, on whatever the main thread was doing: a
     # SIGINT during a service registration ran the engine's shutdown while the registration lock was held,
     # and the node hung (seen in CI). Here the handler only raises a flag; the hooks run from the loop below.

@@ -13,7 +13,7 @@ import time
 import pytest
 from harness import Rig, RosMaster
 
-from reliability.relkit import SCENE, SimPorts, start_node
+from reliability.relkit import SCENE, SimPorts, start_node, wait_output
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
@@ -42,3 +42,27 @@ def test_a_signal_in_the_first_second_of_start_up_stops_the_node_cleanly(
         launcher.stop(node)
     print(f"{signal.Signals(sig).name}: (delay s, exit status, traceback) {outcomes}")
     assert all(code == 0 and not traceback for _, code, traceback in outcomes), outcomes
+
+
+def test_a_node_started_before_its_master_says_so_stops_at_once_on_a_signal_and_starts_with_the_master(
+    launcher: Rig,
+):
+    """Before its master is up the node has registered nothing: it says what it waits for, one Ctrl-C ends
+    it at once with status 0 (not after --shutdown-timeout with status 1), and a master that comes up is
+    joined."""
+    from tools.rig import free_port, ros_environment
+
+    port = free_port()
+    launcher.env = ros_environment(launcher.env, launcher.workdir, port)  # no master there yet
+    ports = SimPorts.free()  # nor a simulator: once registered, the node waits for it
+    node = start_node(launcher, ports, "--scene", SCENE, "--shutdown-timeout", "30", node_name="early_bird")
+    wait_output(node, f"waiting for the ROS master at http://localhost:{port}", 30)
+    node.popen.send_signal(signal.SIGINT)
+    assert node.popen.wait(timeout=5) == 0, node.output()
+    assert "SIGINT before the node registered: exiting" in node.output()
+    node = start_node(launcher, ports, "--scene", SCENE, node_name="early_bird")
+    wait_output(node, "waiting for the ROS master", 30)
+    launcher.start("roscore", ["roscore", "-p", str(port)])
+    wait_output(node, "setting scene = 'scene_drone_sensors.jsonc' (command line)", 60)
+    wait_output(node, "waiting for it", 30)  # registered, now waiting for the simulator
+    assert launcher.stop(node) == 0, node.output()
