@@ -32,6 +32,7 @@ FRAMES_FRESH_S = PROBE_TIMEOUT_S + PROBE_PERIOD_S
 PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 FIRST_ANSWER_S = 10.0  # a new connection's first answer; NNG's own handshake timeout is also 10 s
 CLIENT_RECV_TIMEOUT_MS = 300000  # the client's own services timeout, restored after the first answer
+PORT_CHECK_S = 0.5  # a refused connection: how long each port is tried, to say which one refused
 RETRY_FIRST_S = 0.25
 RETRY_STEPS: tuple[tuple[int, float], ...] = (
     (10, 0.5),  # the first ~5 s: a restarted server is found within half a second of listening
@@ -54,10 +55,34 @@ class Verdict:
 class SimUnreachable(EngineError, ConnectionError):
     """No simulator answers at an address."""
 
-    def __init__(self, address: str, topicsport: int, servicesport: int, cause: BaseException) -> None:
-        super().__init__(
-            f"simulator at {address}:{topicsport}/{servicesport} not reachable ({type(cause).__name__})"
-        )
+    def __init__(self, address: str, topicsport: int, servicesport: int, reason: str) -> None:
+        super().__init__(f"simulator at {address}:{topicsport}/{servicesport} not reachable ({reason})")
+
+
+def unreachable_reason(address: str, ports: tuple[int, ...], cause: BaseException) -> str:
+    """Why a connection failed, in NNG's words ("Connection refused"), with what it means here: which of
+    the ports refused it (a quick TCP connect to each), or that the host name may not resolve."""
+    import pynng
+
+    words = str(cause) or type(cause).__name__
+    if isinstance(cause, pynng.exceptions.ConnectionRefused) and (closed := closed_ports(address, ports)):
+        words += f": {closed}"
+    elif isinstance(cause, pynng.exceptions.AddressInvalid):
+        words += ": is the address or host name right?"
+    return words
+
+
+def closed_ports(address: str, ports: tuple[int, ...]) -> str:
+    """"nothing listens on port P" for the ports at `address` that refuse a TCP connection, or ""."""
+    import socket
+
+    closed = []
+    for port in ports:
+        try:
+            socket.create_connection((address, port), timeout=PORT_CHECK_S).close()
+        except OSError:
+            closed.append(str(port))
+    return f"nothing listens on port {' or '.join(closed)}" if closed else ""
 
 
 class SimSilent(SimUnreachable):
@@ -86,19 +111,27 @@ def open_client(
     import pynng
     from projectairsim import ProjectAirSimClient
 
+    ports = (topicsport, servicesport)
     client = ProjectAirSimClient(address, topicsport, servicesport)
     try:
         client.connect()
     except pynng.exceptions.Timeout:  # connected, but NNG's handshake never came
         _close_sockets(client)
-        raise SimSilent(address, topicsport, servicesport, first_answer) from None
+        raise _silent(address, ports, first_answer) from None
     except Exception as exc:
         _close_sockets(client)
-        raise SimUnreachable(address, topicsport, servicesport, exc) from None
+        raise SimUnreachable(address, *ports, unreachable_reason(address, ports, exc)) from None
     if not first_answer_within(client, first_answer):
         _close_sockets(client)
-        raise SimSilent(address, topicsport, servicesport, first_answer)
+        raise _silent(address, ports, first_answer)
     return client
+
+
+def _silent(address: str, ports: tuple[int, int], seconds: float) -> SimUnreachable:
+    """SimSilent, unless one of the ports refuses connections: then the simulator is not (yet) there, and
+    the caller retries as for any unreachable one."""
+    closed = closed_ports(address, ports)
+    return SimUnreachable(address, *ports, closed) if closed else SimSilent(address, *ports, seconds)
 
 
 def first_answer_within(client: Any, seconds: float) -> bool:

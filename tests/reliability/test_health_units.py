@@ -4,6 +4,7 @@ re-registration with a restarted master, and the converter registry's closed wor
 from __future__ import annotations
 
 import math
+import socket
 import time
 from dataclasses import dataclass, field
 
@@ -85,10 +86,19 @@ def test_topic_frames_arriving_while_probes_go_unanswered_are_no_stall_and_the_v
     assert FRAMES_FRESH_S <= 0.5 * (PROBE_MISSES - 1) * (PROBE_TIMEOUT_S + PROBE_PERIOD_S)
 
 
-def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable():
+def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable_saying_why():
     port = free_port()
     with pytest.raises(SimUnreachable, match=rf"simulator at 127\.0\.0\.1:{port}/{port} not reachable"):
         open_client("127.0.0.1", port, port)
+    with socket.socket() as listening:  # one port taken, the other free: the free one is named
+        listening.bind(("127.0.0.1", 0))
+        listening.listen()
+        taken = listening.getsockname()[1]
+        with pytest.raises(SimUnreachable) as raised:
+            open_client("127.0.0.1", taken, port)
+    assert str(raised.value).endswith(f"not reachable (nothing listens on port {port})")  # not "silent"
+    with pytest.raises(SimUnreachable, match=r"\(Address invalid: is the address or host name right\?\)"):
+        open_client("no.such.host.invalid", port, port)
 
 
 def test_connect_retries_with_backoff_and_gives_up_when_ros_shuts_down(caplog):
