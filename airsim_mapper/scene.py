@@ -10,6 +10,7 @@ the simulator.
 from __future__ import annotations
 
 import contextlib
+import difflib
 import json
 import logging
 import threading
@@ -271,7 +272,14 @@ def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
             str(simconfigpath), "the config directory does not exist", unreadable=True
         )
     path = contained(root, scene_file, "the scene file")
-    raw = _precheck(root, path)
+    try:
+        raw = _precheck(root, path)
+    except SceneConfigError as err:
+        hint = "" if path.exists() else _missing_scene_hint(root, scene_file)
+        if not hint:
+            raise
+        (problem,) = err.problems
+        raise SceneConfigError.single(problem.file, problem.message + hint, unreadable=True) from None
     from projectairsim.utils import load_scene_config_as_dict
 
     try:
@@ -282,6 +290,17 @@ def read_scene(simconfigpath: str | Path, scene_file: str) -> Scene:
     except Exception as err:  # the client raises jsonschema, lark, OS and type errors
         raise _diagnose_robot(root, raw, err) from None
     return _scene(data, scene_file, path)
+
+
+def _missing_scene_hint(root: Path, scene_file: str) -> str:
+    """For a scene file that is not there: the file of that name in the folder (the name was given with
+    the folder in it, `sim_config/scene.jsonc`), or a close name."""
+    names = sorted(path.name for path in root.glob("*.jsonc"))
+    name = PurePath(scene_file).name
+    if name in names:
+        return f" (scene files are named inside --simconfigpath {root}: '{name}')"
+    close = difflib.get_close_matches(name, names, n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def scene_from_config(config: Mapping[str, Any], scene_file: str, simconfigpath: str | Path) -> Scene:

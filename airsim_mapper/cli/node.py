@@ -37,6 +37,7 @@ from airsim_mapper.cli.settings import SETTINGS, given_settings, resolve_setting
 from airsim_mapper.cli.startup import StartUp, Stopper, connect
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.logs import ros_logger, wait_for_rosout
+from airsim_mapper.mapping.expand import namespace_variables
 from airsim_mapper.mapping.names import resolve_namespace
 
 if TYPE_CHECKING:
@@ -254,7 +255,13 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     wrapper, reloader = startup.wrapper, None
     if wrapper is not None:
         log.info("bridges:\n%s", format_table(wrapper.bridges))
-        log.info("namespace %r (topics under it, frames prefixed with it)", wrapper.namespace or "/")
+        names = namespace_variables(wrapper.namespace)
+        if names["namespace"]:
+            log.info(
+                "namespace %r: topics under it, frames prefixed %r", names["namespace"], names["frame_prefix"]
+            )
+        else:
+            log.info("no namespace: topics and frames as the mapping names them")
         if not settings["scene"]:
             topics = [b.ros for b in wrapper.bridges if b.converter == "load_scene"]
             waiting_on = " or ".join(topics) or "(the mapping has no load_scene rule)"

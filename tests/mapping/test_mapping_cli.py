@@ -119,8 +119,21 @@ def test_a_mistyped_shipped_mapping_name_gets_a_did_you_mean(tmp_path, capsys, m
 
 
 def test_a_missing_scene_file_exits_2_and_an_invalid_scene_exits_1(tmp_path, capsys):
-    assert main([str(DEFAULT), "--scene", "absent.jsonc", "--simconfigpath", str(SIM_CONFIG)]) == 2
-    assert "absent.jsonc: cannot read the scene file" in capsys.readouterr().err
+    def missing(scene: str) -> str:
+        assert main([str(DEFAULT), "--scene", scene, "--simconfigpath", str(SIM_CONFIG)]) == 2
+        return capsys.readouterr().err.strip()
+
+    assert missing("absent.jsonc").endswith(
+        "absent.jsonc: cannot read the scene file: No such file or directory"
+    )
+    # the folder written into the name, or a name off by a letter: the one meant is named
+    inside = f"--simconfigpath {SIM_CONFIG.resolve()}"
+    assert missing("sim_config/scene_drone_sensors.jsonc").endswith(
+        f"(scene files are named inside {inside}: 'scene_drone_sensors.jsonc')"
+    )
+    assert missing("scene_drone_sensor.jsonc").endswith(
+        "No such file or directory (did you mean 'scene_drone_sensors.jsonc'?)"
+    )
     (tmp_path / "bad.jsonc").write_text('{"id": 5}')
     assert main([str(DEFAULT), "--scene", "bad.jsonc", "--simconfigpath", str(tmp_path)]) == 1
     assert "does not match the scene schema: id: 5 is not of type 'string'" in capsys.readouterr().err
