@@ -146,3 +146,17 @@ def test_the_start_scene_is_read_and_expanded_once_when_the_final_name_is_the_ea
     assert final.specs is early.specs and calls == {"expand": 1, "read_scene": 1}
     renamed = prepare(settings, "other", "", early)  # a __name:= the early look could not know
     assert renamed.scene is early.scene and calls == {"expand": 2, "read_scene": 1}
+
+
+def test_the_master_is_waited_for_by_a_bounded_tcp_connect_first() -> None:
+    import socket
+
+    from airsim_mapper.cli.node import listening
+
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        port = server.getsockname()[1]
+        assert listening(f"http://127.0.0.1:{port}/", timeout=1.0)
+    assert not listening(f"http://127.0.0.1:{port}/", timeout=1.0)  # closed now
+    assert not listening("http://localhost:notaport/", timeout=1.0)

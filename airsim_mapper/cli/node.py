@@ -126,13 +126,30 @@ def wait_for_master(period_s: float = MASTER_POLL_S) -> None:
     init_node would, but before anything is registered: a signal meanwhile exits at once)."""
     import rosgraph
 
+    uri = rosgraph.get_master_uri()
     master = rosgraph.Master(f"/{DEFAULT_NODE_NAME}_waiting")
     said = False
-    while not master.is_online():
+    while not (listening(uri, timeout=1.0) and master.is_online()):
         if not said:
-            print(f"waiting for the ROS master at {rosgraph.get_master_uri()}", file=sys.stderr, flush=True)
+            print(f"waiting for the ROS master at {uri}", file=sys.stderr, flush=True)
             said = True
         time.sleep(period_s)
+
+
+def listening(uri: str, timeout: float) -> bool:
+    """Whether something accepts TCP connections at `uri`'s host and port within `timeout` seconds (an
+    XML-RPC call to a host that does not answer would wait for the system's connect timeout)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(uri)
+    try:
+        socket.create_connection(
+            (parts.hostname or "localhost", parts.port or 11311), timeout=timeout
+        ).close()
+    except (OSError, ValueError):
+        return False
+    return True
 
 
 def prepare(
