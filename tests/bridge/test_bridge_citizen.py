@@ -117,7 +117,8 @@ def test_ns_remap_and_command_line_over_parameter(rig_factory):
     wait_topic("/fleet/sim2/airsim_node/Drone2/actual_pose", node)
     assert "setting scene = 'scene_two_drones.jsonc' (command line)" in node.output()
     assert "setting namespace = 'sim2' (command line)" in node.output()
-    assert "namespace '/fleet/sim2': topics under it, frames prefixed 'fleet/sim2/'" in node.output()
+    line = "namespace '/fleet/sim2': topics under it, frames prefixed 'fleet/sim2/'"  # after the bridge table
+    wait_until(lambda: line in node.output(), 20, what="the namespace line")
     lookup("fleet/sim2/map", "fleet/sim2/airsim_node/Drone2")
     # The streaming image's frame follows switch_view to the other drone's camera.
     import rospy

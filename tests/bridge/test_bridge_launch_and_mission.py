@@ -36,7 +36,8 @@ def test_two_drone_scene_bridges_both_robots_and_their_frames(rig_factory):
         tf = buffer.lookup_transform("map", f"airsim_node/{robot}", rospy.Time(0), rospy.Duration(10))
         east.append(tf.transform.translation.y)
     assert east == [-2.5, 2.5]
-    assert "no namespace: topics and frames as the mapping names them" in rig.node.output()
+    line = "no namespace: topics and frames as the mapping names them"  # logged after the bridge table
+    wait_until(lambda: line in rig.node.output(), 20, what="the namespace line")
     rig.node.stop()
 
 
