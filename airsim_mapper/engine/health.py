@@ -73,7 +73,8 @@ def unreachable_reason(address: str, ports: tuple[int, ...], cause: BaseExceptio
 
 
 def closed_ports(address: str, ports: tuple[int, ...]) -> str:
-    """"nothing listens on port P" for the ports at `address` that refuse a TCP connection, or ""."""
+    """Says "nothing listens on port P" of the ports at `address` that refuse a TCP connection; "" if none
+    does."""
     import socket
 
     closed = []
