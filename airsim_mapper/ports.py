@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["SERVICES_PORT", "TOPICS_PORT", "port"]
+__all__ = ["SERVICES_PORT", "TOPICS_PORT", "accepts_connections", "port"]
 
 TOPICS_PORT = 8989  # pub-sub (the client's Pair0 topics socket)
 SERVICES_PORT = 8990  # requests (the client's Req0 services socket)
@@ -18,3 +18,14 @@ def port(value: Any) -> int:
     if not 1 <= number <= 65535:
         raise ValueError(f"{value!r} is not a port (1-65535)")
     return number
+
+
+def accepts_connections(host: str, number: int, timeout: float) -> bool:
+    """Whether something at `host` accepts a TCP connection on port `number` within `timeout` seconds."""
+    import socket
+
+    try:
+        socket.create_connection((host, number), timeout=timeout).close()
+    except OSError:
+        return False
+    return True

@@ -101,6 +101,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 DEFAULT_NODE_NAME = "projectairsim"
 MASTER_POLL_S = 0.5  # how often a node started before its master asks again
+MASTER_CONNECT_S = 1.0  # each time, how long a TCP connect to the master may take
 STOP_CHECK_S = 1.0  # the main loop also checks for a stop this often, should a wake-up be missed
 
 
@@ -129,7 +130,7 @@ def wait_for_master(period_s: float = MASTER_POLL_S) -> None:
     uri = rosgraph.get_master_uri()
     master = rosgraph.Master(f"/{DEFAULT_NODE_NAME}_waiting")
     said = False
-    while not (listening(uri, timeout=1.0) and master.is_online()):
+    while not (listening(uri, MASTER_CONNECT_S) and master.is_online()):
         if not said:
             print(f"waiting for the ROS master at {uri}", file=sys.stderr, flush=True)
             said = True
@@ -139,17 +140,16 @@ def wait_for_master(period_s: float = MASTER_POLL_S) -> None:
 def listening(uri: str, timeout: float) -> bool:
     """Whether something accepts TCP connections at `uri`'s host and port within `timeout` seconds (an
     XML-RPC call to a host that does not answer would wait for the system's connect timeout)."""
-    import socket
     from urllib.parse import urlsplit
 
-    parts = urlsplit(uri)
+    from airsim_mapper.ports import accepts_connections
+
     try:
-        socket.create_connection(
-            (parts.hostname or "localhost", parts.port or 11311), timeout=timeout
-        ).close()
-    except (OSError, ValueError):
+        parts = urlsplit(uri)
+        host, number = parts.hostname or "localhost", parts.port or 11311
+    except ValueError:  # a port that is no number
         return False
-    return True
+    return accepts_connections(host, number, timeout)
 
 
 def prepare(

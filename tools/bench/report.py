@@ -299,7 +299,7 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
     if "scale" in pairs:
         ours, floor = pairs["scale"]
         drones = len(_of_kind(ours, "pose"))
-        note = _cpu_note(ours, floor, received.get("scale"))
+        note = _cpu_note(floor, received.get("scale"))
         out.append(_limit(f"{drones} drones: bridge CPU", ours["bridge_cpu_cores"], 0.25, "cores", note))
         note = _p99_note(ours, floor, received.get("scale"))
         p99 = _worst_pose(ours)[1]
@@ -334,7 +334,7 @@ def _p99_note(ours: dict[str, Any], floor: dict[str, Any], received: dict[str, A
     return note
 
 
-def _cpu_note(ours: dict[str, Any], floor: dict[str, Any], received: dict[str, Any] | None = None) -> str:
+def _cpu_note(floor: dict[str, Any], received: dict[str, Any] | None = None) -> str:
     """The CPU of the bare forwarder and, if measured, of the receive loop alone on the same frames: an
     absolute target read beside what the transport alone took on this host in this run."""
     note = f"bare forwarder {floor['forwarder_cpu_cores']:.3f} cores"
