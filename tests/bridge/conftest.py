@@ -1,11 +1,11 @@
 """Bridge integration fixtures: one private roscore for the package, the pytest process as a probe node,
-and per-module rigs of (headless server + bridge node) subprocesses."""
+and rigs of (headless server + bridge node) subprocesses, per test or per module."""
 
 from __future__ import annotations
 
 import os
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 from bridgeharness import Stack
@@ -34,8 +34,8 @@ def ros_session(tmp_path_factory) -> Iterator[RosMaster]:
             os.environ[key] = value
 
 
-@pytest.fixture(scope="module")
-def rig_factory(ros_session: RosMaster, tmp_path_factory) -> Iterator[callable]:
+def _stacks(ros_session: RosMaster, tmp_path_factory) -> Iterator[Callable[[], Stack]]:
+    """A factory of stacks; everything they started is stopped, and its logs printed, at the end."""
     launchers: list[Rig] = []
 
     def make() -> Stack:
@@ -48,3 +48,16 @@ def rig_factory(ros_session: RosMaster, tmp_path_factory) -> Iterator[callable]:
         launcher.stop_all()
         print(launcher.dump_logs())
     time.sleep(0.5)  # let the master drop the stopped node's registrations
+
+
+@pytest.fixture
+def rig_factory(ros_session: RosMaster, tmp_path_factory) -> Iterator[Callable[[], Stack]]:
+    """Stacks of one test, stopped at its end even when it fails: a node left running would serve the
+    next test's topics (the same names on the same master) and hold its simulator's topics channel."""
+    yield from _stacks(ros_session, tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def module_rig_factory(ros_session: RosMaster, tmp_path_factory) -> Iterator[Callable[[], Stack]]:
+    """Stacks shared by the tests of a module (its `rig` fixture), stopped at the module's end."""
+    yield from _stacks(ros_session, tmp_path_factory)

@@ -7,7 +7,7 @@ import time
 
 import pytest
 from bridgeharness import wait_topic
-from harness import Child, wait_until
+from harness import Child, RigError, wait_until
 
 SENSORS, TWO = "scene_drone_sensors.jsonc", "scene_two_drones.jsonc"
 
@@ -264,14 +264,19 @@ def test_a_lazy_stream_s_first_message_is_taken_after_the_subscription(rig_facto
         )
     names = {f"fresh_bridge: {name}" for _, _, name in streams}
     dropped: dict[str, int] = {}
+    seen: set[str] = set()
 
     def counted() -> bool:
         for status in rospy.wait_for_message("/diagnostics", DiagnosticArray, timeout=10).status:
+            seen.add(status.name)
             if status.name in names:
                 dropped[status.name] = int({kv.key: kv.value for kv in status.values}["stale_dropped"])
         return len(dropped) == len(names) and all(v >= 1 for v in dropped.values())
 
-    wait_until(counted, 10, what=f"stale frames counted in /diagnostics ({dropped})")
+    try:
+        wait_until(counted, 10, what="stale frames counted in /diagnostics")
+    except RigError as exc:  # with what was seen at the end (`what` is written before the wait)
+        raise AssertionError(f"{exc}: {dropped}; statuses: {sorted(seen)}") from None
     rig.node.stop()
 
 

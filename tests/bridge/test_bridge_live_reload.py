@@ -64,8 +64,8 @@ def mapping_file(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory, mapping_file: Path) -> Stack:
-    rig = rig_factory()
+def rig(module_rig_factory, mapping_file: Path) -> Stack:
+    rig = module_rig_factory()
     rig.start_node(
         "--scene",
         "scene_drone_sensors.jsonc",

@@ -19,8 +19,8 @@ GRAVITY = 9.80665
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Stack:
-    rig = rig_factory()
+def rig(module_rig_factory) -> Stack:
+    rig = module_rig_factory()
     rig.start_node(
         "--scene", "scene_drone_sensors.jsonc", node_name="extra_bridge", wait_for=f"{ROBOT}/IMU1/imu"
     )

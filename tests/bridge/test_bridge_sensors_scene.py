@@ -58,8 +58,8 @@ EXPECTED_SUBSCRIBED = {
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Stack:
-    rig = rig_factory()
+def rig(module_rig_factory) -> Stack:
+    rig = module_rig_factory()
     rig.start_node(
         "--scene",
         "scene_drone_sensors.jsonc",

@@ -26,8 +26,8 @@ ROBOT_SERVICES = (
 
 
 @pytest.fixture(scope="module")
-def rig(rig_factory) -> Stack:
-    rig = rig_factory()
+def rig(module_rig_factory) -> Stack:
+    rig = module_rig_factory()
     rig.start_node(
         "--scene", "scene_drone_sensors.jsonc", node_name="srv_bridge", wait_for=f"{ROBOT}/actual_pose"
     )
