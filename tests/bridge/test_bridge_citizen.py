@@ -249,13 +249,17 @@ def test_a_lazy_stream_s_first_message_is_taken_after_the_subscription(rig_facto
     rig = rig_factory()
     robot = "/airsim_node/Drone1"
     rig.start_node("--scene", SENSORS, node_name="fresh_bridge", wait_for=f"{robot}/actual_pose")
+    # The camera renders only while someone listens: its cached frame stays from the first read. The lidar
+    # scans on, unheard; its cached sample is the last scan, which may be as new as the subscription (then
+    # it is current and published, so only the first-message check applies to it).
+    camera = "camera_image[Drone1/DownCamera/scene_camera]"
     streams = (
-        (f"{robot}/DownCamera/scene_camera/image", Image, "camera_image[Drone1/DownCamera/scene_camera]"),
+        (f"{robot}/DownCamera/scene_camera/image", Image, camera),
         (f"{robot}/lidar1/lidar", PointCloud2, "lidar[Drone1/lidar1]"),
     )
     for topic, cls, _ in streams:
         rospy.wait_for_message(topic, cls, timeout=20)  # the simulator now holds a frame of this time
-    time.sleep(3.0)  # simulated time goes on; the cached frames stay behind
+    time.sleep(3.0)  # simulated time goes on; the camera's cached frame stays behind
     for topic, cls, _ in streams:
         before = rospy.wait_for_message(f"{robot}/actual_pose", PoseStamped, timeout=10).header.stamp
         first = rospy.wait_for_message(topic, cls, timeout=20).header.stamp
@@ -271,10 +275,10 @@ def test_a_lazy_stream_s_first_message_is_taken_after_the_subscription(rig_facto
             seen.add(status.name)
             if status.name in names:
                 dropped[status.name] = int({kv.key: kv.value for kv in status.values}["stale_dropped"])
-        return len(dropped) == len(names) and all(v >= 1 for v in dropped.values())
+        return len(dropped) == len(names) and dropped[f"fresh_bridge: {camera}"] >= 1
 
     try:
-        wait_until(counted, 10, what="stale frames counted in /diagnostics")
+        wait_until(counted, 10, what="the camera's stale frame counted in /diagnostics")
     except RigError as exc:  # with what was seen at the end (`what` is written before the wait)
         raise AssertionError(f"{exc}: {dropped}; statuses: {sorted(seen)}") from None
     rig.node.stop()
