@@ -146,6 +146,29 @@ def test_the_start_scene_is_read_and_expanded_once_when_the_final_name_is_the_ea
     assert final.specs is early.specs and calls == {"expand": 1, "read_scene": 1}
     renamed = prepare(settings, "other", "", early)  # a __name:= the early look could not know
     assert renamed.scene is early.scene and calls == {"expand": 2, "read_scene": 1}
+    # the namespace rosgraph gives early ("/fleet/") and the one rospy's name gives later ("/fleet") are one
+    fleet = prepare(settings, "other", "", renamed, "/fleet/")
+    assert calls["expand"] == 3
+    assert prepare(settings, "other", "", fleet, "/fleet").specs is fleet.specs and calls["expand"] == 3
+
+
+def test_the_node_resolves_relative_rule_names_in_its_own_namespace(tmp_path) -> None:
+    """A relative name is the node's namespace's: under /fleet it collides with the default mapping's
+    /fleet/airsim_node/<robot_name>/actual_pose (the --namespace default is the node's namespace)."""
+    from airsim_mapper.cli.node import config_problem
+
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(
+        "version: 1\nextends: default\nrules:\n  - name: odometry\n"
+        "    ros: airsim_node/<robot_name>/actual_pose\n"
+    )
+    settings = {"mapping": str(mine), "scene": "scene_basic_drone.jsonc", "simconfigpath": str(SIM_CONFIG)}
+    prepared, problem = config_problem(settings, "bridge", "/fleet", None, "/fleet/")
+    assert prepared is None
+    same = "(that is, '/fleet/airsim_node/Drone1/actual_pose') is also produced by actual_pose[Drone1]"
+    assert same in problem
+    prepared, problem = config_problem(settings, "bridge", "/sim2", None, "/fleet/")  # --namespace /sim2
+    assert problem is None and prepared is not None
 
 
 def test_the_master_is_waited_for_by_a_bounded_tcp_connect_first() -> None:

@@ -38,7 +38,7 @@ from airsim_mapper.cli.startup import StartUp, Stopper, connect
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.logs import ros_logger, wait_for_rosout
 from airsim_mapper.mapping.expand import namespace_variables
-from airsim_mapper.mapping.names import resolve_namespace
+from airsim_mapper.mapping.names import resolve_namespace, ros_namespace
 
 if TYPE_CHECKING:
     from airsim_mapper.mapping.pipeline import Prepared
@@ -153,21 +153,29 @@ def listening(uri: str, timeout: float) -> bool:
 
 
 def prepare(
-    settings: dict[str, Any], node_name: str, namespace: str, known: Prepared | None = None
+    settings: dict[str, Any],
+    node_name: str,
+    namespace: str,
+    known: Prepared | None = None,
+    node_namespace: str = "",
 ) -> Prepared:
     """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings)."""
     from airsim_mapper.mapping.pipeline import prepare as prepare_pipeline
 
     sources = (settings["mapping"], settings["scene"], settings["simconfigpath"])
-    return prepare_pipeline(*sources, node_name, namespace, known)
+    return prepare_pipeline(*sources, node_name, namespace, known, node_namespace)
 
 
 def config_problem(
-    settings: dict[str, Any], node_name: str, namespace: str, known: Prepared | None = None
+    settings: dict[str, Any],
+    node_name: str,
+    namespace: str,
+    known: Prepared | None = None,
+    node_namespace: str = "",
 ) -> tuple[Prepared | None, str | None]:
     """(prepared, None), or (None, what to print) when the mapping or scene is invalid."""
     try:
-        return prepare(settings, node_name, namespace, known), None
+        return prepare(settings, node_name, namespace, known, node_namespace), None
     except ConfigError as exc:
         return None, str(exc)
     except OSError as exc:
@@ -215,7 +223,7 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     # The command line's values are checked before anything connects (the master may not be up).
     early_settings = values(resolve_settings(given))
     early_namespace = resolve_namespace(early_settings["namespace"], node_namespace)
-    early, problem = config_problem(early_settings, node_name, early_namespace)
+    early, problem = config_problem(early_settings, node_name, early_namespace, None, node_namespace)
     if problem:
         print(problem, file=sys.stderr)
         return 1
@@ -241,7 +249,7 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     # Parameters may have changed the settings (then the mapping is prepared again); the name is rospy's.
     name = rospy.get_name().rsplit("/", 1)[-1]
     namespace = resolve_namespace(settings["namespace"], rospy.get_namespace())
-    prepared, problem = config_problem(settings, name, namespace, early)
+    prepared, problem = config_problem(settings, name, namespace, early, ros_namespace(rospy.get_name()))
     if stop:
         rospy.signal_shutdown(f"signal {stop.signals[0]}")
         return 0

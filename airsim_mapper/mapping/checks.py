@@ -166,7 +166,7 @@ class _Checker:
 
     def across(self, rules: Sequence[Rule], indexes: Sequence[int]) -> None:
         names: dict[str, int] = {}
-        outputs: dict[str, tuple[str, int]] = {}
+        outputs: dict[str, tuple[str, str, int]] = {}
         for rule, index in zip(rules, indexes):
             if rule.name in names:
                 first = self.marks.value(("rules", names[rule.name]))[0]
@@ -179,14 +179,14 @@ class _Checker:
             if rule.ros is None or not rule.options.enabled or rule.match:
                 continue  # rules with a match may share a template; expansion finds real collisions
             if rule.ros in outputs:
-                other, line = outputs[rule.ros]
+                other, file, line = outputs[rule.ros]
+                where = f"{file}:{line}" if file and file != self.file else f"line {line}"
                 self.add(
                     ("rules", index, "ros"),
-                    f"rule '{rule.name}': ROS name '{rule.ros}' is also produced by rule '{other}' "
-                    f"(line {line})",
+                    f"rule '{rule.name}': ROS name '{rule.ros}' is also produced by rule '{other}' ({where})",
                 )
             else:
-                outputs[rule.ros] = (rule.name, rule.line)
+                outputs[rule.ros] = (rule.name, rule.file, rule.line)
 
 
 def check_rules(

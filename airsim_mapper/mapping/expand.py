@@ -31,7 +31,7 @@ from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.match import matches
 from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
 from airsim_mapper.mapping.model import Mapping as MappingDoc
-from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.mapping.names import resolve_name, ros_name_problem
 from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem
 from airsim_mapper.scene import Scene
 
@@ -160,16 +160,19 @@ def namespace_variables(namespace: str) -> dict[str, str]:
 
 
 def expand(
-    mapping: MappingDoc, scene: Scene | None, node_name: str, namespace: str = ""
+    mapping: MappingDoc, scene: Scene | None, node_name: str, namespace: str = "", node_namespace: str = ""
 ) -> tuple[BridgeSpec, ...]:
     """All concrete bridges of `mapping` over `scene` (only the node's own without one); MappingError when
-    names are illegal or collide."""
+    names are illegal or collide. Names are compared as ROS resolves them for the node `node_name` in its
+    ROS namespace `node_namespace` ("" for the root): `x` and `/x` are one topic there, `~x` the node's."""
     bridges: list[BridgeSpec] = []
     problems: list[Problem] = []
     owners: dict[str, BridgeSpec] = {}
-    lines = {rule.name: rule.line for rule in mapping.rules}
+    places = {rule.name: (rule.file or mapping.source, rule.line) for rule in mapping.rules}
     on = clock_rule_on(rule.converter for rule in mapping.rules if rule.options.enabled)
-    owned = node_names(node_name, namespace_variables(namespace)["namespace"], clock_rule=on)
+    owned = node_names(
+        node_name, namespace_variables(namespace)["namespace"], clock_rule=on, node_namespace=node_namespace
+    )
     for rule in mapping.rules:
         if not rule.options.enabled:
             continue
@@ -183,7 +186,8 @@ def expand(
             bridge = _bridge(rule, key, variables, source)
             if bridge.ros is not None:
                 why = ros_name_problem(bridge.ros)
-                taken = taken_problem(bridge.ros, bridge.converter, owned)
+                full = resolve_name(bridge.ros, node_name, node_namespace) if not why else bridge.ros
+                taken = taken_problem(full, bridge.converter, owned)
                 if why:
                     message = f"bridge {bridge.name}: ROS name '{bridge.ros}' is not valid: {why}"
                     problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
@@ -191,15 +195,18 @@ def expand(
                     problems.append(
                         Problem(rule.file or mapping.source, rule.line, 1, f"bridge {bridge.name}: {taken}")
                     )
-                elif bridge.ros in owners:
-                    other = owners[bridge.ros]
+                elif full in owners:
+                    other = owners[full]
+                    file, line = places[other.rule]
+                    where = f"line {line}" if file == (rule.file or mapping.source) else f"{file}:{line}"
+                    written = f"'{bridge.ros}'" + (f" (that is, '{full}')" if full != bridge.ros else "")
                     message = (
-                        f"bridge {bridge.name}: ROS name '{bridge.ros}' is also produced by "
-                        f"{other.name} (rule at line {lines[other.rule]})"
+                        f"bridge {bridge.name}: ROS name {written} is also produced by "
+                        f"{other.name} (rule at {where})"
                     )
                     problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
                 else:
-                    owners[bridge.ros] = bridge
+                    owners[full] = bridge
             bridges.append(bridge)
     if problems:
         raise MappingError(problems)

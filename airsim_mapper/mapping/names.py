@@ -28,3 +28,20 @@ def resolve_namespace(namespace: str, node_namespace: str = "/") -> str:
     full = name if name.startswith("/") else f"{node_namespace}/{name}"
     parts = [part for part in full.split("/") if part]
     return "/" + "/".join(parts) if parts else ""
+
+
+def resolve_name(name: str, node_name: str, node_namespace: str = "") -> str:
+    """A legal ROS name as rospy resolves it for the node `node_name` in `node_namespace` ("" for the root,
+    else `/a/b`), before remappings: absolute as written, private (`~x`) below the node, relative (`x`)
+    in the node's namespace."""
+    namespace = node_namespace.rstrip("/")
+    if name.startswith("/"):
+        return name
+    if name.startswith("~"):
+        return f"{namespace}/{node_name.strip('/')}/{name[1:].lstrip('/')}"
+    return f"{namespace}/{name}"
+
+
+def ros_namespace(ros_name: str) -> str:
+    """The namespace ("" for the root, else `/a/b`) of a node's full ROS name (`/a/b/node`)."""
+    return ros_name.rsplit("/", 1)[0] if ros_name.startswith("/") else ""

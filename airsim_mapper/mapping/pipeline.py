@@ -14,6 +14,7 @@ from pathlib import Path
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.scene import Scene, read_scene
 
 __all__ = ["Prepared", "load_and_expand", "prepare"]
@@ -29,6 +30,7 @@ class Prepared:
     mapping: Mapping
     scene: Scene | None = None
     specs: tuple[BridgeSpec, ...] | None = None
+    node_namespace: str = ""  # the node's ROS namespace, where its relative names resolve
 
 
 def prepare(
@@ -38,6 +40,7 @@ def prepare(
     node_name: str,
     namespace: str = "",
     known: Prepared | None = None,
+    node_namespace: str = "",
 ) -> Prepared:
     """Load the mapping and, with a scene file, read the scene and expand the mapping over it; raise
     MappingError or SceneConfigError (both ConfigError), or OSError. What `known` holds for the same
@@ -45,14 +48,15 @@ def prepare(
     sources = (str(mapping_path), scene_file, str(simconfigpath))
     same = known is not None and known.sources == sources
     mapping = known.mapping if same else load_mapping(mapping_path)
+    names = (node_name, namespace, resolve_namespace(node_namespace or "/"))  # "/a/" as "/a", "/" as ""
     if not scene_file:
-        return Prepared(sources, node_name, namespace, mapping)
+        return Prepared(sources, node_name, namespace, mapping, node_namespace=names[2])
     scene = known.scene if same else read_scene(simconfigpath, scene_file)
-    if same and (known.node_name, known.namespace) == (node_name, namespace):
+    if same and (known.node_name, known.namespace, known.node_namespace) == names:
         specs = known.specs
     else:
-        specs = expand(mapping, scene, node_name, namespace)
-    return Prepared(sources, node_name, namespace, mapping, scene, specs)
+        specs = expand(mapping, scene, *names)
+    return Prepared(sources, node_name, namespace, mapping, scene, specs, names[2])
 
 
 def load_and_expand(

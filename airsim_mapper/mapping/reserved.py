@@ -30,14 +30,16 @@ def status_topic(node_name: str) -> str:
     return f"/airsim_mapper/{node_name.strip('/')}/status"
 
 
-def node_names(node_name: str, namespace: str = "", clock_rule: bool = False) -> dict[str, str]:
-    """Every name the node `node_name` owns (its private names in the root namespace and in `namespace`),
-    each with what owns it. /clock is the clock rule's while one is on."""
+def node_names(
+    node_name: str, namespace: str = "", clock_rule: bool = False, node_namespace: str = ""
+) -> dict[str, str]:
+    """Every name the node `node_name` owns (its private names in its ROS namespace, in the root and in
+    `namespace`), each with what owns it. /clock is the clock rule's while one is on."""
     owned = dict(GLOBAL)
     if clock_rule:
         owned[CLOCK] = "the clock rule's /clock (rosgraph_msgs/Clock)"
     node = node_name.strip("/")
-    for prefix in dict.fromkeys(("", namespace.rstrip("/"))):
+    for prefix in dict.fromkeys((node_namespace.rstrip("/"), "", namespace.rstrip("/"))):
         for service in PRIVATE_SERVICES:
             owned[f"{prefix}/{node}/{service}"] = f"the node's private service ~{service}"
         owned[status_topic(f"{prefix}/{node}")] = "the node's status topic (std_msgs/String)"

@@ -11,6 +11,7 @@ from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
 from airsim_mapper.mapping.reserved import GLOBAL
+from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import read_scene
 
 EXTENDING = "version: 1\nextends: default\n"
@@ -89,10 +90,40 @@ def test_two_rules_with_one_name_and_different_types_are_a_located_error(tmp_pat
     assert line.startswith(
         f"{mapping}:9:10: rule 'mine': ROS name '<namespace>/airsim_node/<robot_name>/actual_pose'"
     )
-    assert line.endswith("is also produced by rule 'actual_pose' (line 40)")
+    assert line.endswith(f"is also produced by rule 'actual_pose' ({DEFAULT_MAPPING}:40)")
 
 
 def test_the_shipped_mappings_take_no_name_the_node_owns(scene):
     for name in ("default", "enu"):
         for namespace in ("", "/sim2"):
             assert expand(load_mapping(name), scene, "projectairsim", namespace)
+
+
+@pytest.mark.parametrize("node_namespace", ["", "/fleet"])
+def test_a_relative_name_collides_with_the_absolute_one_it_resolves_to(scene, node_namespace):
+    """`x` is `/x` for a node at the root and `/fleet/x` for one in /fleet: the same topic as the absolute
+    name another rule gives it (its spelling with the literal name is refused when the mapping loads)."""
+    relative = pose_rule("mine", "airsim_node/<robot_name>/actual_pose")
+    mapping = load_mapping_text(EXTENDING + "rules:\n" + relative, "mine.yaml")
+    with pytest.raises(MappingError) as raised:
+        expand(mapping, scene, "bridge", node_namespace, node_namespace)
+    (problem,) = raised.value.problems
+    assert (problem.file, problem.line) == ("mine.yaml", 4)  # the rule's own line
+    assert problem.message.startswith(
+        f"bridge mine[Drone1]: ROS name 'airsim_node/Drone1/actual_pose' (that is, "
+        f"'{node_namespace}/airsim_node/Drone1/actual_pose') is also produced by actual_pose[Drone1] "
+    )
+    assert problem.message.endswith("default.yaml:40)")  # the other rule is in the base file
+    # in another namespace it is another topic
+    assert expand(mapping, scene, "bridge", node_namespace, "/elsewhere")
+
+
+@pytest.mark.parametrize("node_namespace", ["", "/fleet"])
+def test_a_private_name_on_the_nodes_own_service_is_refused(scene, node_namespace):
+    mapping = load_mapping_text("version: 1\nrules:\n" + pose_rule("mine", "~reload_mapping"), "mine.yaml")
+    with pytest.raises(MappingError) as raised:
+        expand(mapping, scene, "bridge", "", node_namespace)
+    (problem,) = raised.value.problems
+    owned = f"'{node_namespace}/bridge/reload_mapping' belongs to the node's private service ~reload_mapping"
+    assert owned in problem.message
+    assert expand(load_mapping_text("version: 1\nrules:\n" + pose_rule("mine", "~pose")), scene, "bridge")
