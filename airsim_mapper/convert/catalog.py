@@ -384,7 +384,8 @@ CONVERTERS: dict[str, ConverterInfo] = {
             CALL,
             "command",
             "cmd_vel",
-            "Twist -> MoveByVelocityBodyFrame (or MoveByVelocity) params, with limits and a watchdog",
+            "Twist -> MoveByVelocityBodyFrame params (or MoveByVelocity with params.frame world), with limits "
+            "and a watchdog",
             example=_e(
                 {"linear": {"x": 1.0, "y": 0.0, "z": -0.5}, "angular": {"x": 0.0, "y": 0.0, "z": 0.2}}
             ),

@@ -1,7 +1,10 @@
 """ROS -> simulator converters: velocity commands, pose commands, service requests, scene loading.
 
-- cmd_vel: geometry_msgs/Twist -> MoveByVelocityBodyFrame (or MoveByVelocity) params. With the ENU
-  convention the Twist is FLU body (REP-103), so vy, vz and the yaw rate are negated for FRD.
+- cmd_vel: geometry_msgs/Twist -> MoveByVelocityBodyFrame (or MoveByVelocity) params. params ``frame``
+  says which frame the Twist's linear velocity is in, the robot's body (``body``, the default, for
+  MoveByVelocityBodyFrame) or the world (``world``, for MoveByVelocity). With the ENU convention a body
+  Twist is FLU (REP-103), so vy, vz are negated for FRD, and a world Twist is ENU, so vx and vy swap and
+  vz is negated for NED; the yaw rate, about up rather than down, is negated in both.
   Limits (Options.limits): max_vertical_speed clips |vz|, then max_linear_speed bounds the norm of
   (vx, vy, vz) (scaled down, direction kept), max_yaw_rate clips the yaw rate; with on_violation
   "reject" any violation raises instead. Non-finite values are always rejected.
@@ -27,6 +30,8 @@ from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.logs import shorten
 
+BODY, WORLD = "body", "world"
+VELOCITY_FRAMES = (BODY, WORLD)  # cmd_vel params.frame: what the Twist's linear velocity is in
 DEFAULT_DURATION_S = 3.0
 QUAT_NORM_MIN = 0.5
 QUAT_NORM_MAX = 2.0
@@ -144,8 +149,11 @@ def cmd_vel(msg: Any, ctx: ConvertContext) -> dict[str, Any]:
     """geometry_msgs/Twist -> {vx, vy, vz, duration, drivetrain: 0, yaw_is_rate: True, yaw}."""
     velocity = _xyz(msg.linear, "linear")
     yaw_rate = _finite(msg.angular.z, "angular.z")
+    frame = ctx.params.get("frame", BODY)
+    if frame not in VELOCITY_FRAMES:
+        raise ConversionError(f"cmd_vel: params.frame must be one of {list(VELOCITY_FRAMES)}, got {frame!r}")
     if ctx.enu:
-        velocity = frames.flu_to_frd(velocity)
+        velocity = frames.flu_to_frd(velocity) if frame == BODY else frames.enu_to_ned(velocity)
         yaw_rate = -yaw_rate
     limits = getattr(ctx.options, "limits", None)
     velocity, yaw_rate = apply_limits(velocity, yaw_rate, limits, on_clamp=ctx.clamped)

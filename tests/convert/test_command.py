@@ -283,3 +283,20 @@ def test_load_scene_refuses_a_name_longer_than_its_limit_and_shows_only_its_star
     assert load_scene(String(data="a.jsonc"), seven) == {"scene": "a.jsonc"}
     with pytest.raises(ConversionError, match="at most 6 are accepted"):
         load_scene(String(data="a.jsonc"), ConvertContext(params={"max_length": 6}))
+
+
+def test_cmd_vel_in_the_world_frame_converts_enu_to_ned():
+    """params.frame world (MoveByVelocity): an ENU Twist east 1, north 2, up 0.5 is NED north 2, east 1,
+    down -0.5; the yaw rate about up is negated about down. In NED it passes as it is."""
+    world = {"frame": "world"}
+    params = cmd_vel(twist(1.0, 2.0, 0.5), ConvertContext(convention="enu", params=world))
+    assert (params["vx"], params["vy"], params["vz"], params["yaw"]) == (2.0, 1.0, -0.5, -0.3)
+    params = cmd_vel(twist(), ConvertContext(params=world))
+    assert (params["vx"], params["vy"], params["vz"], params["yaw"]) == (1.0, 2.0, -0.5, 0.3)
+    body = cmd_vel(twist(), ConvertContext(convention="enu", params={"frame": "body"}))
+    assert body == cmd_vel(twist(), ConvertContext(convention="enu"))
+
+
+def test_cmd_vel_refuses_an_unknown_frame():
+    with pytest.raises(ConversionError, match=r"params.frame must be one of .'body', 'world'., got 'wrold'"):
+        cmd_vel(twist(), ConvertContext(params={"frame": "wrold"}))
