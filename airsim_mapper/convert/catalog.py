@@ -68,6 +68,12 @@ class ConverterInfo:
     example: Example | None = None  # what the property tests start from (every entry has one)
     max_pixels: bool = False  # takes the rule's params.max_pixels and params.max_bytes (images)
     inline: bool = False  # light: a few fields in, one small message out; run on the receive thread
+    required_params: Mapping[str, str] = field(
+        default_factory=dict
+    )  # params it cannot run without: what each is
+    param_choices: Mapping[str, tuple[str, ...]] = field(
+        default_factory=dict
+    )  # params with a fixed set of values
 
     @property
     def sim_kind(self) -> str:
@@ -84,6 +90,7 @@ def _e(message: Mapping[str, Any], **context: Any) -> Example:
 
 
 STAMP = {"time_stamp": 1}
+VELOCITY_FRAMES = ("body", "world")  # cmd_vel's params.frame: the Twist's linear velocity is in (body first)
 POSE = {"position": {"x": 1.0, "y": 2.0, "z": 3.0}, "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}}
 ORIGIN = {"xyz": "1 2 -3", "rpy-deg": "0 0 90"}  # a robot actor's origin in a scene
 # a 1x1 PNG of one black pixel, as the simulator sends a compressed colour image
@@ -384,8 +391,9 @@ CONVERTERS: dict[str, ConverterInfo] = {
             CALL,
             "command",
             "cmd_vel",
-            "Twist -> MoveByVelocityBodyFrame params (or MoveByVelocity with params.frame world), with limits "
-            "and a watchdog",
+            "Twist -> MoveByVelocityBodyFrame params (or MoveByVelocity with params.frame world), with "
+            "limits and a watchdog",
+            param_choices={"frame": VELOCITY_FRAMES},
             example=_e(
                 {"linear": {"x": 1.0, "y": 0.0, "z": -0.5}, "angular": {"x": 0.0, "y": 0.0, "z": 0.2}}
             ),
@@ -450,7 +458,8 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "command",
             "trigger",
             "Trigger -> the robot method params.method on every robot of the scene (sim: the robots prefix)",
-            example=_e({}),
+            example=_e({}, params={"method": "Hover"}),
+            required_params={"method": "the robot method to call on every robot (e.g. Hover)"},
         ),
         _c(
             "set_bool",
@@ -461,6 +470,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "set_bool",
             "SetBool request -> sim service call with the bool as the rule's param",
             example=_e({"data": True}, params={"arg": "do_pause"}),
+            required_params={"arg": "the simulator parameter that receives the bool (e.g. do_pause)"},
         ),
         _c(
             "switch_view",

@@ -26,12 +26,12 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.convert import frames, sim_fields
+from airsim_mapper.convert.catalog import VELOCITY_FRAMES
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.logs import shorten
 
-BODY, WORLD = "body", "world"
-VELOCITY_FRAMES = (BODY, WORLD)  # cmd_vel params.frame: what the Twist's linear velocity is in
+BODY = VELOCITY_FRAMES[0]  # cmd_vel's default frame
 DEFAULT_DURATION_S = 3.0
 QUAT_NORM_MIN = 0.5
 QUAT_NORM_MAX = 2.0

@@ -47,6 +47,7 @@ class _Checker:
             self.add((*base, "converter"), f"rule '{rule.name}': unknown converter '{rule.converter}'{hint}")
         else:
             self._converter_fit(rule, info, base)
+            self._params(rule, info, base)
         self._sides(rule, info, base)
         self._templates(rule, base)
         self._options(rule, base)
@@ -63,6 +64,21 @@ class _Checker:
             else:
                 kind = found
         return dataclasses.replace(rule, ros_kind=kind)
+
+    def _params(self, rule: Rule, info: catalog.ConverterInfo, base: tuple[Any, ...]) -> None:
+        """The params the converter cannot run without, and those with a fixed set of values."""
+        for key, what in info.required_params.items():
+            if key not in rule.params:
+                where = (*base, "params") if "params" in self.data["rules"][base[1]] else base
+                self.add(where, f"rule '{rule.name}': converter '{info.name}' needs params.{key}: {what}")
+        for key, choices in info.param_choices.items():
+            if key in rule.params and rule.params[key] not in choices:
+                hint = did_you_mean(str(rule.params[key]), choices)
+                self.add(
+                    (*base, "params", key),
+                    f"rule '{rule.name}': params.{key} must be one of {', '.join(choices)}, "
+                    f"got {rule.params[key]!r}{hint}",
+                )
 
     def _converter_fit(self, rule: Rule, info: catalog.ConverterInfo, base: tuple[Any, ...]) -> None:
         if info.direction != rule.direction:
