@@ -248,9 +248,11 @@ def _rules(
         else:
             why = "is dropped by remove" if name in removed else f"is not in the base '{label}'"
             hint = "" if name in removed else did_you_mean(name, names)
+            missing = [key for key in FULL_RULE_KEYS if key not in rule]
+            partial = f" (it has no {', '.join(missing)})" if len(missing) < len(FULL_RULE_KEYS) else ""
             message = (
                 f"rule '{name}' overrides a rule that {why}{hint}; a new rule needs "
-                f"{', '.join(FULL_RULE_KEYS)}"
+                f"{', '.join(FULL_RULE_KEYS)}{partial}"
             )
             problems.append(_located(origins, (*here, "name"), message))
     for path in [p for p in (*table.values, *table.keys) if p[:1] == ("rules",) and len(p) > 1]:

@@ -225,6 +225,9 @@ def test_overriding_or_removing_a_rule_the_base_lacks_is_an_error_with_a_did_you
         f"{tmp_path / 'c.yaml'}:5:12: rule 'posee' overrides a rule that is not in the base 'base.yaml' "
         "(did you mean 'pose'?); a new rule needs for_each, direction, converter",
     ]
+    new_rule = "  - {name: odom, for_each: robot, converter: odometry, ros: /o}\n"
+    (line,) = errors(write(tmp_path, "d.yaml", f"version: 1\nextends: base.yaml\nrules:\n{new_rule}"))
+    assert line.endswith("a new rule needs for_each, direction, converter (it has no direction)")
 
 
 def test_problems_of_the_merged_mapping_point_at_the_file_that_holds_the_bad_value(base, tmp_path):
