@@ -4,6 +4,7 @@ and radar azimuths, checked through tf as a ROS user would see them."""
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -178,3 +179,44 @@ def test_radar_azimuth_is_positive_to_the_left_as_rep103_says(rig: Stack):
     assert len(left) and len(right)
     assert np.median(left) == pytest.approx(math.radians(30), abs=0.15)
     assert np.median(right) == pytest.approx(-math.radians(30), abs=0.15)
+
+
+def test_a_world_frame_cmd_vel_flies_east_when_told_east(rig_factory, tmp_path):
+    """cmd_vel pointed at MoveByVelocity with params.frame world, as the default mapping's comment offers:
+    an ENU Twist of +x is east, whatever the drone faces (it faces north here)."""
+    import rospy
+    from geometry_msgs.msg import PoseStamped, Twist
+
+    mapping = tmp_path / "world_cmd_vel.yaml"
+    mapping.write_text(
+        f"version: 1\nextends: {MAPPING}\nrules:\n  - name: cmd_vel\n"
+        "    sim: /Sim/<scene_name>/robots/<robot_name>/MoveByVelocity\n    params: {frame: world}\n"
+    )
+    rig = rig_factory()
+    rig.start_node(
+        "--scene",
+        "scene_drone_sensors.jsonc",
+        "--mapping",
+        str(mapping),
+        node_name="world_cmd_vel",
+        wait_for=f"{ROBOT}/actual_pose",
+    )
+
+    def position() -> np.ndarray:
+        p = receive(f"{ROBOT}/actual_pose", PoseStamped).pose.position
+        return np.array([p.x, p.y, p.z])
+
+    pub = rospy.Publisher(f"{ROBOT}/cmd_vel", Twist, queue_size=1)
+    try:
+        wait_until(lambda: pub.get_num_connections() > 0, 20, what="the cmd_vel link")
+        start = position()
+        cmd = Twist()
+        cmd.linear.x = 2.0
+        for _ in range(15):  # 1.5 s at 10 Hz
+            pub.publish(cmd)
+            time.sleep(0.1)
+        moved = position() - start
+    finally:
+        pub.unregister()
+    assert moved[0] > 2.0, moved  # east
+    assert abs(moved[1]) < 0.3 and abs(moved[2]) < 0.3, moved
