@@ -256,6 +256,7 @@ class Engine:
                     log.error("loading %s failed; restoring the bridges of %s", scene_file, self.scene.file)
                     self.apply(self.scene)
                 raise
+            self._forget_old_time()
             self.apply(scene, specs)
         log.info("scene %s (%s) loaded: %d bridges", scene.name, scene_file, len(self.bridges))
         return scene
@@ -269,6 +270,7 @@ class Engine:
             self.hub.drop_all()
             self.sim.forget_all()
             self.world = world
+            self._forget_old_time()
             self.apply(scene, specs)
 
     def request_scene(self, scene_file: str) -> None:
@@ -331,6 +333,13 @@ class Engine:
         self.hub.rebind(link)
 
     # --- a new simulator session ------------------------------------------------------------
+    def _forget_old_time(self) -> None:
+        """A scene was loaded: its clock starts from zero. The old scene's transforms go from the node's tf
+        buffer; kept, tf refused the new scene's as data from the past, and a goal in a robot's frame was
+        placed from where the robot had been. (Another scene's topics differ, so the time watch, which
+        compares each stream with itself, sees no jump back.)"""
+        self.ros.forget_tf()
+
     def _time_went_back(self, jump_s: float) -> None:
         """The time watch saw the simulator's clock go back (a restart, or a scene loaded again): tf and
         the lazy streams' stale filters start over. Runs on the receive thread: takes no engine lock."""

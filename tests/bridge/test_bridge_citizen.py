@@ -371,3 +371,42 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
     finally:
         bridge.stop()
         publisher.unregister()
+
+
+def test_a_goal_in_the_robots_frame_after_loading_another_scene_is_placed_from_the_new_pose(rig_factory):
+    """Another scene's clock starts from zero under a running node: the node's tf forgets the old scene's
+    transforms, so "1 m ahead" is 1 m ahead of where the robot is now, not of where it was."""
+    import numpy as np
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+
+    rig = rig_factory()
+    robot = "/airsim_node/Drone1"
+    node = rig.start_node("--scene", SENSORS, node_name="switch_bridge", wait_for=f"{robot}/actual_pose")
+    latest: list = []
+    sub = rospy.Subscriber(f"{robot}/actual_pose", PoseStamped, lambda m: latest.append(m.pose.position))
+    pub = rospy.Publisher(f"{robot}/desired_pose", PoseStamped, queue_size=1)
+
+    def at(x: float, y: float, z: float) -> bool:
+        p = latest[-1] if latest else None
+        return p is not None and np.allclose([p.x, p.y, p.z], [x, y, z], atol=0.05)
+
+    try:
+        wait_until(lambda: pub.get_num_connections() > 0, 20, what="the desired_pose link")
+        pub.publish(goal(10.0, 10.0, -5.0, "map"))
+        wait_until(lambda: at(10.0, 10.0, -5.0), 15, what="the goal in map")
+        pub.publish(goal(1.0, 0.0, 0.0, "airsim_node/Drone1"))  # the node's tf now holds this scene's time
+        wait_until(lambda: at(11.0, 10.0, -5.0), 15, what="the first body-frame goal")
+        time.sleep(3.0)  # the old scene's time runs well ahead of where the new one starts
+        rostopic_pub(rig, "/ProjectAirSim/node/switch_bridge/load_scene", TWO, "-1")
+        wait_topic("/airsim_node/Drone2/actual_pose", node)
+        wait_until(lambda: not at(11.0, 10.0, -5.0), 15, what="Drone1 at its new scene's start")
+        time.sleep(1.0)
+        start = latest[-1]
+        pub.publish(goal(1.0, 0.0, 0.0, "airsim_node/Drone1"))
+        wait_until(lambda: at(start.x + 1.0, start.y, start.z), 15, what="1 m ahead of the new pose")
+    finally:
+        sub.unregister()
+        pub.unregister()
+    assert "TF_OLD_DATA" not in node.output()
+    node.stop()
