@@ -174,7 +174,9 @@ class RosService(Bridge):
             return _fill(response, False, f"{type(exc).__name__}: {exc}")
         self.stats.messages += 1
         self.after_call(params, result)
-        return _fill(response, _accepted(result), "" if isinstance(result, bool) else str(result))
+        if result is None or isinstance(result, bool):
+            return _fill(response, _accepted(result), "" if result else refused(self.spec.sim, params))
+        return _fill(response, _accepted(result), str(result))
 
     def _on_all_robots(self, response: Any, params: dict) -> Any:
         """Call `<sim>/<robot>/<params.method>` on every robot of the scene at once; succeed if all do."""
@@ -217,6 +219,16 @@ def _fill(response: Any, success: bool, message: str) -> Any:
     if hasattr(response, "message"):
         response.message = message
     return response
+
+
+def refused(sim: str, params: dict) -> str:
+    """The answer to a call the simulator answered with false and no reason: which method, and its own
+    time limit when it has one (a land from high up takes longer than its 60 s and stops where it got)."""
+    text = f"{sim.rsplit('/', 1)[-1]} returned false"
+    limit = params.get("timeout_sec")
+    if isinstance(limit, (int, float)) and not isinstance(limit, bool) and limit > 0:
+        text += f" (it gives up after its timeout_sec, {limit:g} s; the robot stays where it got to)"
+    return text
 
 
 def reply_timeout(params: dict, default: float) -> float:

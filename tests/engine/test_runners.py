@@ -128,7 +128,8 @@ def test_switch_view_calls_the_simulator_then_every_streaming_image_follows(spec
     assert handler(TriggerRequest()).success and sim.calls == [(spec.sim, {})]
     assert [s.topic for s in streams] == ["/Sim/b", "/Sim/b"]
     sim.result = False  # the simulator refused: the streaming images stay on their cameras
-    assert not handler(TriggerRequest()).success
+    refusal = handler(TriggerRequest())
+    assert not refusal.success and refusal.message == f"{spec.sim.rsplit('/', 1)[-1]} returned false"
     assert [s.topic for s in streams] == ["/Sim/b", "/Sim/b"]
     streams[0].stop()
     sim.result = True
@@ -255,3 +256,12 @@ def test_a_pose_builds_its_transform_only_while_tf_has_a_subscriber(specs, servi
     assert (transform.header.frame_id, transform.child_frame_id) == (tf.parent, tf.child)
     assert transform.transform.translation.x == 1.0 and bridge.stats.messages == 2
     bridge.stop()
+
+
+def test_a_false_reply_to_a_timed_call_names_the_method_and_its_time_limit():
+    from airsim_mapper.engine.ros_to_sim import refused
+
+    assert refused("/Sim/S/robots/Drone1/Land", {"timeout_sec": 60}) == (
+        "Land returned false (it gives up after its timeout_sec, 60 s; the robot stays where it got to)"
+    )
+    assert refused("/Sim/S/robots/Drone1/Hover", {}) == "Hover returned false"
