@@ -183,3 +183,23 @@ def test_the_master_is_waited_for_by_a_bounded_tcp_connect_first() -> None:
         assert listening(f"http://127.0.0.1:{port}/", timeout=1.0)
     assert not listening(f"http://127.0.0.1:{port}/", timeout=1.0)  # closed now
     assert not listening("http://localhost:notaport/", timeout=1.0)
+
+
+def test_a_private_parameter_the_node_does_not_read_is_named_with_what_was_meant() -> None:
+    from airsim_mapper.cli.settings import SWITCHES_ONLY, unread_parameters
+
+    names = [
+        "/fleet/bridge/mapping",  # read
+        "/fleet/bridge/mapings",
+        "/fleet/bridge/max_frame_mb",
+        "/fleet/bridge/extra/nested",
+        "/fleet/other/scene",  # another node's
+        "/rosdistro",
+    ]
+    assert unread_parameters(names, "/fleet/bridge") == [
+        "parameter ~extra is not one the node reads",
+        "parameter ~mapings is not one the node reads (did you mean 'mapping'?)",
+        "parameter ~max_frame_mb is not one the node reads; --max-frame-mb is a command-line switch only",
+    ]
+    options = {dest.replace("_", "-") for dest in vars(parse_args([]))}
+    assert set(SWITCHES_ONLY) <= options  # each is a switch of the node

@@ -33,7 +33,14 @@ from typing import TYPE_CHECKING, Any
 
 from airsim_mapper.cli.errors import SettingError
 from airsim_mapper.cli.limits import raise_open_files, shortfall
-from airsim_mapper.cli.settings import SETTINGS, given_settings, resolve_settings, values
+from airsim_mapper.cli.settings import (
+    SETTINGS,
+    SWITCHES_ONLY,
+    given_settings,
+    resolve_settings,
+    unread_parameters,
+    values,
+)
 from airsim_mapper.cli.startup import StartUp, Stopper, connect
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.logs import ros_logger, wait_for_rosout
@@ -54,11 +61,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     from airsim_mapper.engine.sim_link import MAX_FRAME_MB
     from airsim_mapper.resources import shipped_mappings
 
+    *others, last = (f"--{switch}" for switch in SWITCHES_ONLY)
+    switches_only = f"{', '.join(others)} and {last}"
     parser = argparse.ArgumentParser(
         description=__doc__.splitlines()[0],
-        epilog="Each switch but --nodename, --no-watch, --shutdown-timeout and --max-frame-mb is also a "
-        "private parameter (~address, ~mapping, ...); the command line wins over the parameter, the "
-        "parameter over the default.",
+        epilog=f"Each switch but {switches_only} is also a private parameter (~address, ~mapping, ...); "
+        "the command line wins over the parameter, the parameter over the default.",
     )
     parser.add_argument(
         "--nodename",
@@ -245,6 +253,8 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
         return 1
     for name, setting in resolved.items():
         log.info("setting %s = %r (%s)", name, setting.value, setting.source)
+    for warning in unread_parameters(rospy.get_param_names(), rospy.get_name()):
+        log.warning(warning)
     settings = values(resolved)
     # Parameters may have changed the settings (then the mapping is prepared again); the name is rospy's.
     name = rospy.get_name().rsplit("/", 1)[-1]

@@ -3,7 +3,7 @@ the parameter over the default (the log says where each value came from)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -12,7 +12,16 @@ from airsim_mapper.cli.errors import SettingError
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT, port
 from airsim_mapper.resources import DEFAULT_SIM_CONFIG
 
-__all__ = ["SETTINGS", "Resolved", "Setting", "given_settings", "resolve_settings", "values"]
+__all__ = [
+    "SETTINGS",
+    "SWITCHES_ONLY",
+    "Resolved",
+    "Setting",
+    "given_settings",
+    "resolve_settings",
+    "unread_parameters",
+    "values",
+]
 
 
 @dataclass(frozen=True)
@@ -39,6 +48,7 @@ SETTINGS = (
     Setting("namespace", "", "topic namespace and frame prefix, resolved in the node's ROS namespace"),
 )
 COMMAND_LINE, DEFAULT = "command line", "default"
+SWITCHES_ONLY = ("nodename", "no-watch", "shutdown-timeout", "max-frame-mb")  # switches without a parameter
 
 
 @dataclass(frozen=True)
@@ -96,3 +106,23 @@ def _sim_config_fallback(resolved: dict[str, Resolved]) -> dict[str, Resolved]:
         return resolved
     why = f"default: ./{DEFAULT_SIM_CONFIG} does not exist here, so the package's own"
     return {**resolved, "simconfigpath": Resolved(str(shipped), why)}
+
+
+def unread_parameters(names: Iterable[str], node_name: str) -> list[str]:
+    """What to say of the node's private parameters that no setting reads (`names`: the parameters on the
+    master; `node_name`: the node's full ROS name), so that a mistyped `<param>` is not passed over."""
+    from airsim_mapper.mapping.schema import did_you_mean
+
+    prefix = node_name.rstrip("/") + "/"
+    known = [setting.name for setting in SETTINGS]
+    unread = sorted({name[len(prefix) :].split("/")[0] for name in names if name.startswith(prefix)})
+    said = []
+    for key in (key for key in unread if key not in known):
+        switch = key.replace("_", "-")
+        hint = (
+            f"; --{switch} is a command-line switch only"
+            if switch in SWITCHES_ONLY
+            else did_you_mean(key, known)
+        )
+        said.append(f"parameter ~{key} is not one the node reads{hint}")
+    return said

@@ -88,6 +88,7 @@ def test_rosrun_from_home_in_ros_namespace_with_private_params(rig_factory, tmp_
             f"_servicesport:={ports.services}",
             "_scene:=scene_drone_sensors.jsonc",
             "_mapping:=enu",
+            "_max_frame_mb:=8",  # a switch only: said, not passed over
         ],
         env={"ROS_NAMESPACE": "sim1"},
         cwd=tmp_path,
@@ -96,6 +97,7 @@ def test_rosrun_from_home_in_ros_namespace_with_private_params(rig_factory, tmp_
     out = node.output()
     assert "setting scene = 'scene_drone_sensors.jsonc' (parameter ~scene)" in out
     assert "setting mapping = 'enu' (parameter ~mapping)" in out
+    assert "parameter ~max_frame_mb is not one the node reads; --max-frame-mb is a command-line switch" in out
     assert "setting simconfigpath = " in out and "does not exist here, so the package's own" in out
     assert subscribed("/sim1/ProjectAirSim/node/ns_bridge/load_scene")
     lookup("sim1/map", "sim1/Drone1/base_link")  # the ENU mapping's frames, prefixed
