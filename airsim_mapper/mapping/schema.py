@@ -56,6 +56,14 @@ def _brief(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
+BOUNDS = {  # a number's bound, in words
+    "minimum": "at least",
+    "maximum": "at most",
+    "exclusiveMinimum": "greater than",
+    "exclusiveMaximum": "less than",
+}
+
+
 def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Iterator[tuple[tuple, str]]:
     path = tuple(err.absolute_path)
     loc = where(path, data, local_path(marks, path))
@@ -79,6 +87,9 @@ def _messages(err: jsonschema.ValidationError, data: Any, marks: Marks) -> Itera
         yield path, f"{loc}: must be {_brief(err.validator_value)}, got {_brief(err.instance)}"
     elif err.validator == "pattern":
         yield path, f"{loc}: {_brief(err.instance)} does not match {err.validator_value}"
+    elif err.validator in BOUNDS:
+        bound = f"{BOUNDS[err.validator]} {err.validator_value}"
+        yield path, f"{loc}: must be {bound}, got {_brief(err.instance)}"
     else:
         yield path, f"{loc}: {err.message}"
 

@@ -193,7 +193,7 @@ def test_json_format_reports_each_problem_on_stdout_with_its_place_and_key(tmp_p
             "line": 5,
             "column": 17,
             "key": "rules[0].queue_size",
-            "message": "rules[0] 'imu'.queue_size: -3 is less than the minimum of 1",
+            "message": "rules[0] 'imu'.queue_size: must be at least 1, got -3",
         },
         {
             "file": str(mapping),

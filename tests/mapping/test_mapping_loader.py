@@ -103,7 +103,7 @@ def test_the_loader_reports_problems_from_every_rule_at_once():
         load_mapping_text(text, "m.yaml")
     assert str(caught.value).splitlines() == [
         "m.yaml:11:16: rule 'cmd_vel': unknown converter 'cmd_vell' (did you mean 'cmd_vel'?)",
-        "m.yaml:23:17: rules[1] 'pose'.queue_size: 0 is less than the minimum of 1",
+        "m.yaml:23:17: rules[1] 'pose'.queue_size: must be at least 1, got 0",
     ]
 
 
