@@ -97,9 +97,11 @@ def connect(
     servicesport: int,
     is_shutdown: Callable[[], bool],
     sleep: Callable[[float], Any] | None = None,
+    on_wait: Callable[[str, int], Any] | None = None,
 ) -> Any:
     """Connect to the simulator, retrying with backoff while nothing listens, until it answers or ROS shuts
-    down (then None). SimSilent (the ports are held but nothing answers) is raised, not retried."""
+    down (then None); `on_wait` is told why and the attempts so far before each wait. SimSilent (the ports
+    are held but nothing answers) is raised, not retried."""
     sleep = sleep or time.sleep
     backoff = Backoff()
     while not is_shutdown():
@@ -110,12 +112,35 @@ def connect(
         except SimUnreachable as exc:
             delay = backoff.next_delay()
             log.warning("%s; waiting for it: attempt %d, next in %.1f s", exc, backoff.attempt, delay)
+            if on_wait is not None:
+                on_wait(str(exc), backoff.attempt)
             sleep(delay)
             continue
         if backoff.attempt:
             log.info("simulator at %s:%d/%d answered", address, topicsport, servicesport)
         return client
     return None
+
+
+class WaitingStatus:
+    """The status topic while the node waits for its first connection to the simulator: state "connecting",
+    why, and the attempts so far (made on the first wait; the engine's own status follows it)."""
+
+    def __init__(self, ros_name: str) -> None:
+        self.ros_name = ros_name
+        self._status: Any = None
+
+    def publish(self, reason: str, attempts: int) -> None:
+        from airsim_mapper.engine.ros_link import RosLink
+        from airsim_mapper.engine.status import CONNECTING, StatusPublisher
+
+        if self._status is None:
+            self._status = StatusPublisher(RosLink(), self.ros_name)
+        self._status.publish({"state": CONNECTING, "reason": reason, "attempts": attempts, "scene": ""})
+
+    def close(self) -> None:
+        if self._status is not None:
+            self._status.close()
 
 
 class StartUp:
@@ -146,10 +171,15 @@ class StartUp:
 
         args, settings, prepared = self.args, self.settings, self.prepared
         address, topicsport, servicesport = (settings[k] for k in ("address", "topicsport", "servicesport"))
+        import rospy
+
+        waiting = WaitingStatus(rospy.get_name())
         try:
-            client = connect(address, topicsport, servicesport, self.stopping)
+            client = connect(address, topicsport, servicesport, self.stopping, on_wait=waiting.publish)
         except SimSilent as exc:
             return str(exc)
+        finally:
+            waiting.close()
         if client is None:
             return ""  # stopped while waiting for the simulator
         self.wrapper = ProjectAirSimWrapper(

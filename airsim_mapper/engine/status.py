@@ -1,7 +1,9 @@
 """The node's status topic: `/airsim_mapper/<node>/status` (`<node>` its full ROS name), a latched
 std_msgs/String holding JSON.
 
-Fields: state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
+Before the first connection the node publishes state "connecting", reason (why the simulator is not
+reached), attempts and an empty scene (cli/startup.py). Then the fields are:
+state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
 "unresponsive: ..." while it is open; while connected: probes unanswered though topic frames arrive),
 reconnects, sim_losses, stalls (times the simulator stopped
 answering on an open connection), master_reregistrations, bad_frames and oversized_frames (simulator
@@ -22,6 +24,7 @@ from typing import Any
 
 from airsim_mapper.mapping.reserved import status_topic
 
+CONNECTING = "connecting"  # before the first connection (cli/startup.py)
 CONNECTED = "connected"
 STALE = "stale"
 STOPPED = "stopped"

@@ -40,6 +40,11 @@ def test_node_waits_for_a_simulator_that_is_not_running_yet_and_bridges_once_it_
     node = start_node(launcher, ports, "--scene", SCENE, node_name="early")
     wait_output(node, "waiting for it: attempt 3", 20)
     assert "Traceback" not in node.output()
+    status = probe(launcher, "status", "status", "early")  # the wait is seen over ROS, too
+    wait_until(lambda: bool(statuses(status)), 20, what="a status while the simulator is absent")
+    waiting = statuses(status)[-1]
+    assert waiting["state"] == "connecting" and waiting["attempts"] >= 3, waiting
+    assert "nothing listens on port" in waiting["reason"], waiting
     watcher = probe(launcher, "pose", "watch", f"{ROBOT}/actual_pose")
     wait_output(watcher, "READY", 20)
     start_server(launcher, ports)
@@ -51,6 +56,7 @@ def test_node_waits_for_a_simulator_that_is_not_running_yet_and_bridges_once_it_
     assert bridged - up < 5.0
     assert "answered" in node.output() and "waiting for it: attempt 1, next in 0.2 s" in node.output()
     wait_until(lambda: first_after(stamps(watcher), up) is not None, 30, what="actual_pose after the start")
+    wait_until(lambda: statuses(status)[-1]["state"] == "connected", 10, what="the status connected")
 
 
 def test_ten_simulator_restarts_each_recover_within_five_seconds_and_leak_no_threads_or_sockets(
