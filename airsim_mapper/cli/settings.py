@@ -111,7 +111,7 @@ def _sim_config_fallback(resolved: dict[str, Resolved]) -> dict[str, Resolved]:
 def unread_parameters(names: Iterable[str], node_name: str) -> list[str]:
     """What to say of the node's private parameters that no setting reads (`names`: the parameters on the
     master; `node_name`: the node's full ROS name), so that a mistyped `<param>` is not passed over."""
-    from airsim_mapper.mapping.schema import did_you_mean
+    from airsim_mapper.mapping.names import did_you_mean
 
     prefix = node_name.rstrip("/") + "/"
     known = [setting.name for setting in SETTINGS]

@@ -122,27 +122,6 @@ def connect(
     return None
 
 
-class WaitingStatus:
-    """The status topic while the node waits for its first connection to the simulator: state "connecting",
-    why, and the attempts so far (made on the first wait; the engine's own status follows it)."""
-
-    def __init__(self, ros_name: str) -> None:
-        self.ros_name = ros_name
-        self._status: Any = None
-
-    def publish(self, reason: str, attempts: int) -> None:
-        from airsim_mapper.engine.ros_link import RosLink
-        from airsim_mapper.engine.status import CONNECTING, StatusPublisher
-
-        if self._status is None:
-            self._status = StatusPublisher(RosLink(), self.ros_name)
-        self._status.publish({"state": CONNECTING, "reason": reason, "attempts": attempts, "scene": ""})
-
-    def close(self) -> None:
-        if self._status is not None:
-            self._status.close()
-
-
 class StartUp:
     """The node's start-up on a thread of its own: connect, make the wrapper, load the start scene.
 
@@ -172,6 +151,8 @@ class StartUp:
         args, settings, prepared = self.args, self.settings, self.prepared
         address, topicsport, servicesport = (settings[k] for k in ("address", "topicsport", "servicesport"))
         import rospy
+
+        from airsim_mapper.engine.status import WaitingStatus
 
         waiting = WaitingStatus(rospy.get_name())
         try:

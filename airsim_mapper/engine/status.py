@@ -2,7 +2,7 @@
 std_msgs/String holding JSON.
 
 Before the first connection the node publishes state "connecting", reason (why the simulator is not
-reached), attempts and an empty scene (cli/startup.py). Then the fields are:
+reached), attempts and an empty scene (`WaitingStatus`). Then the fields are:
 state ("connected", "stale" or "stopped"), scene, reason (why stale: the connection closed, or
 "unresponsive: ..." while it is open; while connected: probes unanswered though topic frames arrive),
 reconnects, sim_losses, stalls (times the simulator stopped
@@ -24,7 +24,7 @@ from typing import Any
 
 from airsim_mapper.mapping.reserved import status_topic
 
-CONNECTING = "connecting"  # before the first connection (cli/startup.py)
+CONNECTING = "connecting"  # before the first connection (WaitingStatus)
 CONNECTED = "connected"
 STALE = "stale"
 STOPPED = "stopped"
@@ -47,3 +47,23 @@ class StatusPublisher:
 
     def close(self) -> None:
         self.publisher.unregister()
+
+
+class WaitingStatus:
+    """The status topic while the node waits for its first connection to the simulator: state "connecting",
+    why, and the attempts so far (made on the first wait; the engine's own status follows it)."""
+
+    def __init__(self, ros_name: str) -> None:
+        self.ros_name = ros_name
+        self._status: Any = None
+
+    def publish(self, reason: str, attempts: int) -> None:
+        from airsim_mapper.engine.ros_link import RosLink
+
+        if self._status is None:
+            self._status = StatusPublisher(RosLink(), self.ros_name)
+        self._status.publish({"state": CONNECTING, "reason": reason, "attempts": attempts, "scene": ""})
+
+    def close(self) -> None:
+        if self._status is not None:
+            self._status.close()

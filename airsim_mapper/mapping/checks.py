@@ -19,9 +19,8 @@ from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.match import match_problems
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
-from airsim_mapper.mapping.names import ros_name_problem
+from airsim_mapper.mapping.names import did_you_mean, ros_name_problem
 from airsim_mapper.mapping.origins import located
-from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 

@@ -25,8 +25,8 @@ from typing import Any
 from airsim_mapper.files import MAX_CONFIG_BYTES, ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.errors import MappingError, Problem
+from airsim_mapper.mapping.names import did_you_mean
 from airsim_mapper.mapping.origins import KeyPath, Origins, Table, located
-from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
 from airsim_mapper.resources import MAPPING_SUFFIX, MAPPINGS_DIR, shipped_mappings
 

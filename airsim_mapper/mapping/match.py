@@ -16,7 +16,7 @@ from types import MappingProxyType
 from typing import Any
 
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES
-from airsim_mapper.mapping.schema import did_you_mean
+from airsim_mapper.mapping.names import did_you_mean
 
 NEGATION = "!"
 

@@ -1,8 +1,11 @@
-"""ROS graph name rules (as rosgraph.names.is_legal_name, restricted to ASCII), in pure Python."""
+"""ROS graph name rules (as rosgraph.names.is_legal_name, restricted to ASCII), in pure Python, and the
+did-you-mean every name check gives."""
 
 from __future__ import annotations
 
+import difflib
 import re
+from typing import Any
 
 _LEGAL = re.compile(r"[~/A-Za-z][A-Za-z0-9_/]*")
 
@@ -45,3 +48,9 @@ def resolve_name(name: str, node_name: str, node_namespace: str = "") -> str:
 def ros_namespace(ros_name: str) -> str:
     """The namespace ("" for the root, else `/a/b`) of a node's full ROS name (`/a/b/node`)."""
     return ros_name.rsplit("/", 1)[0] if ros_name.startswith("/") else ""
+
+
+def did_you_mean(word: str, choices: Any) -> str:
+    """` (did you mean 'x'?)` for the closest choice, or '' when none is close."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.8)
+    return f" (did you mean '{close[0]}'?)" if close else ""

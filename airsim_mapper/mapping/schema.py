@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 import json
 from collections.abc import Iterator
 from functools import cache
@@ -11,6 +10,7 @@ from typing import Any
 import jsonschema
 
 from airsim_mapper.mapping.errors import Problem
+from airsim_mapper.mapping.names import did_you_mean
 from airsim_mapper.mapping.origins import local_path, located
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.resources import SCHEMA_PATH
@@ -26,12 +26,6 @@ def schema() -> dict[str, Any]:
 def validator() -> jsonschema.Draft202012Validator:
     """A validator for the mapping schema, built once."""
     return jsonschema.Draft202012Validator(schema())
-
-
-def did_you_mean(word: str, choices: Any) -> str:
-    """` (did you mean 'x'?)` for the closest choice, or '' when none is close."""
-    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.8)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def where(path: tuple[Any, ...], data: Any, shown: tuple[Any, ...] | None = None) -> str:

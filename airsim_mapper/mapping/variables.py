@@ -16,8 +16,8 @@ from typing import Any
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES
+from airsim_mapper.mapping.names import did_you_mean
 from airsim_mapper.mapping.origins import located
-from airsim_mapper.mapping.schema import did_you_mean
 from airsim_mapper.mapping.yamlmarks import Marks
 
 DOMAIN_NAMES = tuple(dict.fromkeys(name for names in DOMAIN_VARIABLES.values() for name in names))
