@@ -193,20 +193,23 @@ def test_a_world_frame_cmd_vel_flies_east_when_told_east(rig_factory, tmp_path):
         "    sim: /Sim/<scene_name>/robots/<robot_name>/MoveByVelocity\n    params: {frame: world}\n"
     )
     rig = rig_factory()
+    robot = f"/world{ROBOT}"  # the module's node serves ROBOT's names on this master
     rig.start_node(
         "--scene",
         "scene_drone_sensors.jsonc",
         "--mapping",
         str(mapping),
+        "--namespace",
+        "world",
         node_name="world_cmd_vel",
-        wait_for=f"{ROBOT}/actual_pose",
+        wait_for=f"{robot}/actual_pose",
     )
 
     def position() -> np.ndarray:
-        p = receive(f"{ROBOT}/actual_pose", PoseStamped).pose.position
+        p = receive(f"{robot}/actual_pose", PoseStamped).pose.position
         return np.array([p.x, p.y, p.z])
 
-    pub = rospy.Publisher(f"{ROBOT}/cmd_vel", Twist, queue_size=1)
+    pub = rospy.Publisher(f"{robot}/cmd_vel", Twist, queue_size=1)
     try:
         wait_until(lambda: pub.get_num_connections() > 0, 20, what="the cmd_vel link")
         start = position()
