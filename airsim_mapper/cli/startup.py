@@ -146,14 +146,13 @@ class StartUp:
             self.failure = f"start-up failed: {type(exc).__name__}: {exc}"
 
     def _run(self) -> str:
+        import rospy
+
+        from airsim_mapper.engine.status import WaitingStatus
         from airsim_mapper.wrapper import ProjectAirSimWrapper
 
         args, settings, prepared = self.args, self.settings, self.prepared
         address, topicsport, servicesport = (settings[k] for k in ("address", "topicsport", "servicesport"))
-        import rospy
-
-        from airsim_mapper.engine.status import WaitingStatus
-
         waiting = WaitingStatus(rospy.get_name())
         try:
             client = connect(address, topicsport, servicesport, self.stopping, on_wait=waiting.publish)

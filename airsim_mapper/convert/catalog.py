@@ -68,12 +68,10 @@ class ConverterInfo:
     example: Example | None = None  # what the property tests start from (every entry has one)
     max_pixels: bool = False  # takes the rule's params.max_pixels and params.max_bytes (images)
     inline: bool = False  # light: a few fields in, one small message out; run on the receive thread
-    required_params: Mapping[str, str] = field(
-        default_factory=dict
-    )  # params it cannot run without: what each is
-    param_choices: Mapping[str, tuple[str, ...]] = field(
-        default_factory=dict
-    )  # params with a fixed set of values
+    # params it cannot run without, with what each is
+    required_params: Mapping[str, str] = field(default_factory=dict)
+    # params with a fixed set of values: each value with the simulator method it goes with ("" for any)
+    param_choices: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
     @property
     def sim_kind(self) -> str:
@@ -90,7 +88,9 @@ def _e(message: Mapping[str, Any], **context: Any) -> Example:
 
 
 STAMP = {"time_stamp": 1}
-VELOCITY_FRAMES = ("body", "world")  # cmd_vel's params.frame: the Twist's linear velocity is in (body first)
+# cmd_vel's params.frame, what the Twist's linear velocity is in (body, the default, first), with the
+# simulator method that takes a velocity in that frame
+VELOCITY_FRAMES = {"body": "MoveByVelocityBodyFrame", "world": "MoveByVelocity"}
 POSE = {"position": {"x": 1.0, "y": 2.0, "z": 3.0}, "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}}
 ORIGIN = {"xyz": "1 2 -3", "rpy-deg": "0 0 90"}  # a robot actor's origin in a scene
 # a 1x1 PNG of one black pixel, as the simulator sends a compressed colour image
@@ -393,7 +393,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "cmd_vel",
             "Twist -> MoveByVelocityBodyFrame params (or MoveByVelocity with params.frame world), with "
             "limits and a watchdog",
-            param_choices={"frame": VELOCITY_FRAMES},
+            param_choices={"frame": VELOCITY_FRAMES},  # the default first
             example=_e(
                 {"linear": {"x": 1.0, "y": 0.0, "z": -0.5}, "angular": {"x": 0.0, "y": 0.0, "z": 0.2}}
             ),

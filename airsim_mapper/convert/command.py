@@ -31,7 +31,7 @@ from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.logs import shorten
 
-BODY = VELOCITY_FRAMES[0]  # cmd_vel's default frame
+BODY = next(iter(VELOCITY_FRAMES))  # cmd_vel's default frame
 DEFAULT_DURATION_S = 3.0
 QUAT_NORM_MIN = 0.5
 QUAT_NORM_MAX = 2.0

@@ -165,6 +165,7 @@ class RosService(Bridge):
             require_finite(params)
             if self.info.runner == catalog.SERVE_ALL:
                 return self._on_all_robots(response, params)
+            started = time.monotonic()
             result = self.services.sim.call(self.spec.sim, params, timeout=reply_timeout(params, SIM_REPLY_S))
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
@@ -175,7 +176,8 @@ class RosService(Bridge):
         self.stats.messages += 1
         self.after_call(params, result)
         if result is None or isinstance(result, bool):
-            return _fill(response, _accepted(result), "" if result else refused(self.spec.sim, params))
+            said = "" if result else refused(self.spec.sim, params, result, time.monotonic() - started)
+            return _fill(response, _accepted(result), said)
         return _fill(response, _accepted(result), str(result))
 
     def _on_all_robots(self, response: Any, params: dict) -> Any:
@@ -221,13 +223,14 @@ def _fill(response: Any, success: bool, message: str) -> Any:
     return response
 
 
-def refused(sim: str, params: dict) -> str:
-    """The answer to a call the simulator answered with false and no reason: which method, and its own
-    time limit when it has one (a land from high up takes longer than its 60 s and stops where it got)."""
-    text = f"{sim.rsplit('/', 1)[-1]} returned false"
+def refused(sim: str, params: dict, result: bool | None = False, took_s: float = 0.0) -> str:
+    """The answer to a call the simulator answered with false (or nothing) and no reason: which method,
+    and its own time limit when the call ran that long (a land from high up takes longer than its 60 s and
+    stops where it got)."""
+    text = f"{sim.rsplit('/', 1)[-1]} returned {'nothing' if result is None else 'false'}"
     limit = params.get("timeout_sec")
-    if isinstance(limit, (int, float)) and not isinstance(limit, bool) and limit > 0:
-        text += f" (it gives up after its timeout_sec, {limit:g} s; the robot stays where it got to)"
+    if isinstance(limit, (int, float)) and not isinstance(limit, bool) and 0 < limit <= took_s:
+        text += f" after its timeout_sec, {limit:g} s (the robot stays where it got to)"
     return text
 
 

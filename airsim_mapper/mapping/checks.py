@@ -71,12 +71,22 @@ class _Checker:
                 where = (*base, "params") if "params" in self.data["rules"][base[1]] else base
                 self.add(where, f"rule '{rule.name}': converter '{info.name}' needs params.{key}: {what}")
         for key, choices in info.param_choices.items():
-            if key in rule.params and rule.params[key] not in choices:
-                hint = did_you_mean(str(rule.params[key]), choices)
+            value = rule.params.get(key, next(iter(choices)))
+            where = (*base, "params", key) if key in rule.params else base
+            if not isinstance(value, str) or value not in choices:
+                hint = did_you_mean(str(value), choices)
                 self.add(
-                    (*base, "params", key),
-                    f"rule '{rule.name}': params.{key} must be one of {', '.join(choices)}, "
-                    f"got {rule.params[key]!r}{hint}",
+                    where,
+                    f"rule '{rule.name}': params.{key} must be one of {', '.join(choices)}, got "
+                    f"{value!r}{hint}",
+                )
+                continue
+            method, called = choices[value], (rule.sim or "").rsplit("/", 1)[-1]
+            if method and called in choices.values() and called != method:
+                self.add(
+                    where,
+                    f"rule '{rule.name}': params.{key} {value} goes with the simulator method "
+                    f"{method}, not {called}",
                 )
 
     def _converter_fit(self, rule: Rule, info: catalog.ConverterInfo, base: tuple[Any, ...]) -> None:

@@ -261,7 +261,9 @@ def test_a_pose_builds_its_transform_only_while_tf_has_a_subscriber(specs, servi
 def test_a_false_reply_to_a_timed_call_names_the_method_and_its_time_limit():
     from airsim_mapper.engine.ros_to_sim import refused
 
-    assert refused("/Sim/S/robots/Drone1/Land", {"timeout_sec": 60}) == (
-        "Land returned false (it gives up after its timeout_sec, 60 s; the robot stays where it got to)"
+    land = "/Sim/S/robots/Drone1/Land"
+    assert refused(land, {"timeout_sec": 60}, False, 61.0) == (
+        "Land returned false after its timeout_sec, 60 s (the robot stays where it got to)"
     )
-    assert refused("/Sim/S/robots/Drone1/Hover", {}) == "Hover returned false"
+    assert refused(land, {"timeout_sec": 60}, False, 0.2) == "Land returned false"  # refused at once
+    assert refused("/Sim/S/robots/Drone1/Hover", {}, None) == "Hover returned nothing"
