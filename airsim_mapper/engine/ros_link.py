@@ -102,6 +102,22 @@ class StaticTf:
         self._publisher.publish(TFMessage(list(self._transforms.values())))
 
 
+def publisher(
+    name: str,
+    ros_type: str,
+    *,
+    queue_size: int,
+    latch: bool = False,
+    on_peers: Callable[[], None] | None = None,
+) -> Any:
+    """A rospy publisher of `ros_type` (`package/Type`); `on_peers` runs whenever a subscriber connects or
+    leaves."""
+    listener = PeerListener(on_peers) if on_peers is not None else None
+    return rospy.Publisher(
+        name, message_class(ros_type), queue_size=queue_size, latch=latch, subscriber_listener=listener
+    )
+
+
 class RosLink:
     """Every ROS endpoint the runners make, and tf: the engine's one door to rospy for bridges.
 
@@ -125,10 +141,7 @@ class RosLink:
     ) -> Any:
         """A publisher (`publish`, `get_num_connections`, `unregister`); `on_peers` runs whenever a
         subscriber connects or leaves."""
-        listener = PeerListener(on_peers) if on_peers is not None else None
-        return rospy.Publisher(
-            name, message_class(ros_type), queue_size=queue_size, latch=latch, subscriber_listener=listener
-        )
+        return publisher(name, ros_type, queue_size=queue_size, latch=latch, on_peers=on_peers)
 
     def subscriber(
         self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int

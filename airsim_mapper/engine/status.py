@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import threading
+from collections.abc import Callable
 from typing import Any
 
 from airsim_mapper.mapping.reserved import status_topic
@@ -33,12 +34,13 @@ STOPPED = "stopped"
 class StatusPublisher:
     """Publishes status dicts as JSON; skips nothing, so subscribers see every change."""
 
-    def __init__(self, ros: Any, node_name: str) -> None:
+    def __init__(self, make_publisher: Callable[..., Any], node_name: str) -> None:
+        """`make_publisher` is RosLink.publisher or ros_link.publisher."""
         from std_msgs.msg import String
 
         self._string = String
         self._lock = threading.Lock()
-        self.publisher = ros.publisher(status_topic(node_name), "std_msgs/String", queue_size=2, latch=True)
+        self.publisher = make_publisher(status_topic(node_name), "std_msgs/String", queue_size=2, latch=True)
 
     def publish(self, status: dict[str, Any]) -> None:
         text = json.dumps(status, sort_keys=True)
@@ -58,10 +60,10 @@ class WaitingStatus:
         self._status: Any = None
 
     def publish(self, reason: str, attempts: int) -> None:
-        from airsim_mapper.engine.ros_link import RosLink
+        from airsim_mapper.engine.ros_link import publisher
 
         if self._status is None:
-            self._status = StatusPublisher(RosLink(), self.ros_name)
+            self._status = StatusPublisher(publisher, self.ros_name)
         self._status.publish({"state": CONNECTING, "reason": reason, "attempts": attempts, "scene": ""})
 
     def close(self) -> None:

@@ -53,7 +53,7 @@ class Supervisor:
         self.stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self.running = True
         self._stopping = threading.Event()
-        self._status = StatusPublisher(engine.ros, engine.ros_name)
+        self._status = StatusPublisher(engine.ros.publisher, engine.ros_name)
         self._threads = [
             threading.Thread(target=self._watchdog_loop, name="watchdog", daemon=True),
             threading.Thread(target=self._health_loop, name="sim-health", daemon=True),

@@ -20,7 +20,7 @@ from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.match import match_problems
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS, Rule
 from airsim_mapper.mapping.names import did_you_mean, ros_name_problem
-from airsim_mapper.mapping.origins import located
+from airsim_mapper.mapping.origins import located, place_text
 from airsim_mapper.mapping.yamlmarks import Marks
 from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 
@@ -205,7 +205,7 @@ class _Checker:
                 continue  # rules with a match may share a template; expansion finds real collisions
             if rule.ros in outputs:
                 other, file, line = outputs[rule.ros]
-                where = f"{file}:{line}" if file and file != self.file else f"line {line}"
+                where = place_text(file, line, self.file)
                 self.add(
                     ("rules", index, "ros"),
                     f"rule '{rule.name}': ROS name '{rule.ros}' is also produced by rule '{other}' ({where})",

@@ -32,6 +32,7 @@ from airsim_mapper.mapping.match import matches
 from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
 from airsim_mapper.mapping.model import Mapping as MappingDoc
 from airsim_mapper.mapping.names import resolve_name, ros_name_problem
+from airsim_mapper.mapping.origins import place_text
 from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem
 from airsim_mapper.scene import Scene
 
@@ -198,7 +199,7 @@ def expand(
                 elif full in owners:
                     other = owners[full]
                     file, line = places[other.rule]
-                    where = f"line {line}" if file == (rule.file or mapping.source) else f"{file}:{line}"
+                    where = place_text(file, line, rule.file or mapping.source)
                     written = f"'{bridge.ros}'" + (f" (that is, '{full}')" if full != bridge.ros else "")
                     message = (
                         f"bridge {bridge.name}: ROS name {written} is also produced by "

@@ -85,6 +85,12 @@ def key_text(path: KeyPath) -> str:
     return text
 
 
+def place_text(file: str, line: int, here: str) -> str:
+    """Where another rule was written, as seen from a problem in `here`: `line 12` in the same file,
+    `base.yaml:12` in another."""
+    return f"{file}:{line}" if file and file != here else f"line {line}"
+
+
 def located(marks: Marks, path: KeyPath, file: str, message: str, at_key: bool = False) -> Problem:
     """A problem at `path`: its file, line and column (of the key with `at_key`, else of the value), and
     its key path as the file numbers it."""

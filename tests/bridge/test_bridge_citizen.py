@@ -30,6 +30,12 @@ def rostopic_pub(rig, topic: str, scene_file: str, *flags: str) -> Child:
     )
 
 
+def at(poses: list, x: float, y: float, z: float) -> bool:
+    """Whether the last of `poses` (geometry_msgs Pose) is within 5 cm of (x, y, z)."""
+    p = poses[-1].position if poses else None
+    return p is not None and max(abs(p.x - x), abs(p.y - y), abs(p.z - z)) <= 0.05
+
+
 def test_start_without_a_scene_then_load_one_once_per_request(rig_factory):
     rig = rig_factory()
     node = rig.start_node(node_name="waiting_bridge")
@@ -199,7 +205,6 @@ def goal(x: float, y: float, z: float, frame: str, yaw: float = 0.0):
 def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame(rig_factory):
     import math
 
-    import numpy as np
     import rospy
     from geometry_msgs.msg import PoseStamped
 
@@ -214,27 +219,23 @@ def test_goals_in_the_namespaced_world_frame_the_body_frame_and_an_unknown_frame
     try:
         wait_until(lambda: pub.get_num_connections() > 0, 20, what="the desired_pose link")
 
-        def at(x: float, y: float, z: float) -> bool:
-            p = latest[-1].position if latest else None
-            return p is not None and np.allclose([p.x, p.y, p.z], [x, y, z], atol=0.05)
-
         # In the bridge's own namespaced world frame (was refused before).
         pub.publish(goal(0.0, 0.0, -5.0, "sim1/map", yaw=math.pi / 2))
-        wait_until(lambda: at(0.0, 0.0, -5.0), 15, what="the goal in sim1/map")
+        wait_until(lambda: at(latest, 0.0, 0.0, -5.0), 15, what="the goal in sim1/map")
         time.sleep(0.5)  # let tf catch up with the teleport
         # "1 m ahead" in the robot's own frame: facing east (yaw 90 deg in NED), so 1 m east.
         pub.publish(goal(1.0, 0.0, 0.0, "sim1/airsim_node/Drone1"))
-        wait_until(lambda: at(0.0, 1.0, -5.0), 15, what="the body-frame goal")
+        wait_until(lambda: at(latest, 0.0, 1.0, -5.0), 15, what="the body-frame goal")
         q = latest[-1].orientation
         assert math.isclose(2 * math.atan2(q.z, q.w), math.pi / 2, abs_tol=0.02)  # still facing east
         # The same frame written tf1-style with a leading slash, which tf2 itself refuses: 1 m further east.
         pub.publish(goal(1.0, 0.0, 0.0, "/sim1/airsim_node/Drone1"))
-        wait_until(lambda: at(0.0, 2.0, -5.0), 15, what="the slashed body-frame goal")
+        wait_until(lambda: at(latest, 0.0, 2.0, -5.0), 15, what="the slashed body-frame goal")
         # A frame tf does not know: refused with a warning naming it, nothing sent.
         pub.publish(goal(9.0, 9.0, -9.0, "nowhere_frame"))
         wait_until(lambda: "'nowhere_frame'" in node.output(), 15, what="the refusal")
         time.sleep(1.0)
-        assert at(0.0, 2.0, -5.0)
+        assert at(latest, 0.0, 2.0, -5.0)
     finally:
         sub.unregister()
         pub.unregister()
@@ -378,7 +379,6 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
 def test_a_goal_in_the_robots_frame_after_loading_another_scene_is_placed_from_the_new_pose(rig_factory):
     """Another scene's clock starts from zero under a running node: the node's tf forgets the old scene's
     transforms, so "1 m ahead" is 1 m ahead of where the robot is now, not of where it was."""
-    import numpy as np
     import rospy
     from geometry_msgs.msg import PoseStamped
 
@@ -386,27 +386,23 @@ def test_a_goal_in_the_robots_frame_after_loading_another_scene_is_placed_from_t
     robot = "/airsim_node/Drone1"
     node = rig.start_node("--scene", SENSORS, node_name="switch_bridge", wait_for=f"{robot}/actual_pose")
     latest: list = []
-    sub = rospy.Subscriber(f"{robot}/actual_pose", PoseStamped, lambda m: latest.append(m.pose.position))
+    sub = rospy.Subscriber(f"{robot}/actual_pose", PoseStamped, lambda m: latest.append(m.pose))
     pub = rospy.Publisher(f"{robot}/desired_pose", PoseStamped, queue_size=1)
-
-    def at(x: float, y: float, z: float) -> bool:
-        p = latest[-1] if latest else None
-        return p is not None and np.allclose([p.x, p.y, p.z], [x, y, z], atol=0.05)
 
     try:
         wait_until(lambda: pub.get_num_connections() > 0, 20, what="the desired_pose link")
         pub.publish(goal(10.0, 10.0, -5.0, "map"))
-        wait_until(lambda: at(10.0, 10.0, -5.0), 15, what="the goal in map")
+        wait_until(lambda: at(latest, 10.0, 10.0, -5.0), 15, what="the goal in map")
         pub.publish(goal(1.0, 0.0, 0.0, "airsim_node/Drone1"))  # the node's tf now holds this scene's time
-        wait_until(lambda: at(11.0, 10.0, -5.0), 15, what="the first body-frame goal")
+        wait_until(lambda: at(latest, 11.0, 10.0, -5.0), 15, what="the first body-frame goal")
         time.sleep(3.0)  # the old scene's time runs well ahead of where the new one starts
         rostopic_pub(rig, "/ProjectAirSim/node/switch_bridge/load_scene", TWO, "-1")
         wait_topic("/airsim_node/Drone2/actual_pose", node)
-        wait_until(lambda: not at(11.0, 10.0, -5.0), 15, what="Drone1 at its new scene's start")
+        wait_until(lambda: not at(latest, 11.0, 10.0, -5.0), 15, what="Drone1 at its new scene's start")
         time.sleep(1.0)
-        start = latest[-1]
+        start = latest[-1].position
         pub.publish(goal(1.0, 0.0, 0.0, "airsim_node/Drone1"))
-        wait_until(lambda: at(start.x + 1.0, start.y, start.z), 15, what="1 m ahead of the new pose")
+        wait_until(lambda: at(latest, start.x + 1.0, start.y, start.z), 15, what="1 m ahead of the new pose")
     finally:
         sub.unregister()
         pub.unregister()
