@@ -19,7 +19,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client
+from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client, retry_quietly
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.logs import ros_logger
 
@@ -106,7 +106,8 @@ def connect(
     backoff = Backoff()
     while not is_shutdown():
         try:
-            client = open_client(address, topicsport, servicesport)
+            with retry_quietly(backoff.attempt > 0):
+                client = open_client(address, topicsport, servicesport)
         except SimSilent:
             raise
         except SimUnreachable as exc:

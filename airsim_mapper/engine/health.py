@@ -17,7 +17,9 @@ and then for the answer to one cheap request, and raises SimSilent if either doe
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Callable
+import logging
+import threading
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -121,6 +123,29 @@ def open_client(
         _close_sockets(client)
         raise _silent(address, ports, first_answer)
     return client
+
+
+CONNECT_LINE = "Connecting to simulation"  # how the client's connect() announces each attempt
+
+
+@contextlib.contextmanager
+def retry_quietly(quiet: bool = True) -> Iterator[None]:
+    """While a retry runs on this thread (`quiet`), the client's own "Connecting to simulation server"
+    line is left out: the retry logs one line of its own per attempt, not two."""
+    if not quiet:
+        yield
+        return
+    thread = threading.get_ident()
+
+    def keep(record: logging.LogRecord) -> bool:
+        return record.thread != thread or not str(record.msg).startswith(CONNECT_LINE)
+
+    logger = logging.getLogger("projectairsim")
+    logger.filters.insert(0, keep)  # before the wrapper's redirect to rosout, which passes records on
+    try:
+        yield
+    finally:
+        logger.removeFilter(keep)
 
 
 def _silent(address: str, ports: tuple[int, int], seconds: float) -> SimUnreachable:

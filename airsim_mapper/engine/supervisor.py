@@ -25,7 +25,15 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from airsim_mapper.engine.errors import EngineError
-from airsim_mapper.engine.health import LOST, OK, PROBE_PERIOD_S, Backoff, HealthCheck, SimUnreachable
+from airsim_mapper.engine.health import (
+    LOST,
+    OK,
+    PROBE_PERIOD_S,
+    Backoff,
+    HealthCheck,
+    SimUnreachable,
+    retry_quietly,
+)
 from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.sim_link import close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
@@ -187,7 +195,8 @@ class Supervisor:
         slow simulator never holds up status, scene requests or shutdown."""
         engine = self.engine
         try:
-            client = self.client_factory()
+            with retry_quietly():
+                client = self.client_factory()
         except SimUnreachable as exc:
             return str(exc)
         start = time.monotonic()

@@ -3,8 +3,10 @@ re-registration with a restarted master, and the converter registry's closed wor
 
 from __future__ import annotations
 
+import logging
 import math
 import socket
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -14,6 +16,7 @@ from harness import free_port
 from airsim_mapper.cli.node import connect
 from airsim_mapper.convert import registry
 from airsim_mapper.engine.health import (
+    CONNECT_LINE,
     FRAMES_FRESH_S,
     LOST,
     OK,
@@ -26,10 +29,12 @@ from airsim_mapper.engine.health import (
     SimUnreachable,
     Verdict,
     open_client,
+    retry_quietly,
 )
 from airsim_mapper.engine.reregister import ReregisterError, _check, needs_registration
 from airsim_mapper.engine.sim_link import SimLink, SimLinkDead, SimLinkError
 from airsim_mapper.engine.status import status_topic
+from airsim_mapper.wrapper import redirect_client_log
 
 
 def test_backoff_doubles_to_half_a_second_then_slows_to_two_and_five_seconds():
@@ -102,13 +107,35 @@ def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable_saying_
 
 
 def test_connect_retries_with_backoff_and_gives_up_when_ros_shuts_down(caplog):
+    redirect_client_log()  # as in the node: the client's records go on to rosout.projectairsim
     port = free_port()
     slept: list[float] = []
-    result = connect("127.0.0.1", port, port, lambda: len(slept) >= 4, sleep=slept.append)
+    with caplog.at_level(logging.INFO):
+        result = connect("127.0.0.1", port, port, lambda: len(slept) >= 4, sleep=slept.append)
     assert result is None
     assert slept == [0.25, 0.5, 0.5, 0.5]
     lines = [r.getMessage() for r in caplog.records if "waiting for it" in r.getMessage()]
     assert len(lines) == 4 and "attempt 4, next in 0.5 s" in lines[-1]
+    # One line per attempt: the client announces the first, the retries only say they wait.
+    announced = [r for r in caplog.records if r.getMessage().startswith(CONNECT_LINE)]
+    assert len(announced) == 1 and announced[0].name == "projectairsim"
+    kept = logging.getLogger("projectairsim").filters  # the quiet ends with the retries
+    assert len(kept) == 1 and getattr(kept[0], "airsim_mapper", False)
+
+
+def test_a_quiet_retry_leaves_other_threads_connect_lines_alone(caplog):
+    port = free_port()
+    client_log = logging.getLogger("projectairsim")
+    other: list[threading.Thread] = []
+    with caplog.at_level(logging.INFO), retry_quietly():
+        with pytest.raises(SimUnreachable):
+            open_client("127.0.0.1", port, port)
+        other.append(threading.Thread(target=client_log.info, args=(f"{CONNECT_LINE} server at elsewhere",)))
+        other[0].start()
+        other[0].join()
+    assert [r.getMessage() for r in caplog.records if r.getMessage().startswith(CONNECT_LINE)] == [
+        f"{CONNECT_LINE} server at elsewhere"
+    ]
 
 
 def test_a_dead_link_fails_every_call_at_once_and_only_remembers_subscriptions():

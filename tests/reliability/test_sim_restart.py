@@ -55,6 +55,7 @@ def test_node_waits_for_a_simulator_that_is_not_running_yet_and_bridges_once_it_
     bridged = float(line.split("]")[1].strip(" ["))
     assert bridged - up < 5.0
     assert "answered" in node.output() and "waiting for it: attempt 1, next in 0.2 s" in node.output()
+    assert node.output().count("Connecting to simulation server") == 1  # one line per retry, not two
     wait_until(lambda: first_after(stamps(watcher), up) is not None, 30, what="actual_pose after the start")
     wait_until(lambda: statuses(status)[-1]["state"] == "connected", 10, what="the status connected")
 
@@ -111,6 +112,7 @@ def test_ten_simulator_restarts_each_recover_within_five_seconds_and_leak_no_thr
     assert max(fds) <= baseline[1] + 4 and fds[-1] <= fds[1] + 2
     last = statuses(status)[-1]
     assert last["reconnects"] == CYCLES and last["scene"] == SCENE
+    assert node.output().count("Connecting to simulation server") == 1  # the reconnects log their own lines
     assert node.alive()
     print(f"median recovery {statistics.median(recoveries):.2f} s")
 
