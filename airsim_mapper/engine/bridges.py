@@ -147,6 +147,9 @@ class SimToRos(Bridge):
         self.topic = spec.sim
         # Lazy and "fresh": after attaching, messages taken before this simulator time (ns) are dropped.
         self._fresh_after = 0
+        # The stamp of the last transform sent: tf listeners refuse another at the same time (a robot reset
+        # while the simulation is paused) with a TF_REPEATED_DATA warning each, so it is not sent.
+        self._tf_stamp: Any = None
 
     @property
     def lazy(self) -> bool:
@@ -222,14 +225,21 @@ class SimToRos(Bridge):
         if self.spec.tf is None or not self.services.ros.tf_wanted():
             return None
         try:
-            return [self._transform(out, message)]
+            transform = self._transform(out, message)
         except (ConversionError, KeyError, TypeError, AttributeError) as exc:  # no usable pose in it
             self.fail(f"no transform from a message on {self.topic}: {type(exc).__name__}: {exc}")
             return None
+        stamp = transform.header.stamp
+        if stamp == self._tf_stamp:
+            return None
+        self._tf_stamp = stamp
+        return [transform]
 
     def new_session(self) -> None:
-        """The simulator's time started over: a stale filter waiting for the old time stops waiting."""
+        """The simulator's time started over: a stale filter waiting for the old time stops waiting, and
+        the next transform is sent whatever its stamp."""
         self._fresh_after = 0
+        self._tf_stamp = None
 
     def _stale(self, message: Any) -> bool:
         """A message taken before the bridge attached (the simulator's cached last frame): dropped and

@@ -186,3 +186,44 @@ def test_pause_stops_sim_time_step_advances_one_step_and_resume_runs_it_again(ri
     time.sleep(0.2)
     assert clock.stamps[-1] - before > 100_000_000
     clock.sub.unregister()
+
+
+def test_a_reset_while_paused_moves_the_pose_topic_and_sends_tf_no_transform_twice(
+    rig: Stack, pose: PoseWatch
+):
+    """The reset pose comes at the paused time: the topic carries it, and tf, which would refuse a second
+    transform at that time (TF_REPEATED_DATA in every listener), gets it once the time moves on."""
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+    from tf2_msgs.msg import TFMessage
+
+    child = ROBOT.lstrip("/")
+    sent: list[tuple[int, float]] = []  # (stamp ns, x) of each of the robot's transforms on /tf
+
+    def on_tf(message: TFMessage) -> None:
+        mine = [t for t in message.transforms if t.child_frame_id == child]
+        sent.extend((t.header.stamp.to_nsec(), t.transform.translation.x) for t in mine)
+
+    tf_sub = rospy.Subscriber("/tf", TFMessage, on_tf, queue_size=1000)
+    teleport = rospy.Publisher(f"{ROBOT}/desired_pose", PoseStamped, queue_size=1)
+    try:
+        wait_until(lambda: sent and teleport.get_num_connections(), 20, what="/tf and the desired_pose link")
+        target = PoseStamped()
+        target.header.frame_id = "map"
+        target.pose.position.x, target.pose.position.z, target.pose.orientation.w = 5.0, -4.0, 1.0
+        teleport.publish(target)
+        wait_until(lambda: np.allclose(pose.position, [5.0, 0.0, -4.0], atol=0.05), 10, what="the teleport")
+        assert call("/airsim_node/pause", True).success
+        try:
+            time.sleep(0.3)
+            assert call(f"{ROBOT}/reset").success
+            wait_until(lambda: np.allclose(pose.position, [0.0, 0.0, -4.0], atol=0.05), 10, what="the reset")
+            time.sleep(0.3)
+        finally:
+            assert call("/airsim_node/pause", False).success
+        wait_until(lambda: abs(sent[-1][1]) < 0.05, 10, what="the reset pose on /tf after the pause")
+        stamps = [stamp for stamp, _ in sent]
+        assert len(stamps) == len(set(stamps)), "a transform sent twice at one time"
+    finally:
+        tf_sub.unregister()
+        teleport.unregister()

@@ -258,6 +258,31 @@ def test_a_pose_builds_its_transform_only_while_tf_has_a_subscriber(specs, servi
     bridge.stop()
 
 
+def test_a_pose_at_the_stamp_of_the_last_transform_is_published_without_a_transform(specs, services, ros):
+    """A robot reset while the simulation is paused: its new pose comes at the paused time, which tf
+    listeners refuse for a second transform (TF_REPEATED_DATA), so only the topic carries it."""
+    bridge = build(spec_of(specs, "actual_pose[Drone1]"), services)
+    bridge.start()
+    ros.tf_subscribed = True
+
+    def pose(x: float, stamp: int) -> dict:
+        return {
+            "time_stamp": stamp,
+            "position": {"x": x, "y": 0.0, "z": 0.0},
+            "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0},
+        }
+
+    [first] = bridge.handle(pose(1.0, 5_000_000_000))
+    assert bridge.handle(pose(0.0, 5_000_000_000)) is None  # reset while paused: same time
+    published = ros.publishers[bridge.spec.ros].messages
+    assert [m.pose.position.x for m in published[-2:]] == [1.0, 0.0]
+    [later] = bridge.handle(pose(0.0, 5_010_000_000))  # resumed: the time moves on
+    assert later.transform.translation.x == 0.0 and later.header.stamp > first.header.stamp
+    bridge.new_session()  # the simulator's time started over: any stamp is new again
+    assert bridge.handle(pose(0.0, 5_010_000_000)) is not None
+    bridge.stop()
+
+
 def test_a_false_reply_to_a_timed_call_names_the_method_and_its_time_limit():
     from airsim_mapper.engine.ros_to_sim import refused
 
