@@ -216,7 +216,7 @@ class FakeRos:
 class EngineRig:
     """An engine whose every simulator link and world load is recorded."""
 
-    def __init__(self, reconnect: bool = True, mapping: Any = None) -> None:
+    def __init__(self, reconnect: bool = True, mapping: Any = None, ros_name: str | None = None) -> None:
         from airsim_mapper.engine.engine import Engine
         from airsim_mapper.mapping.loader import load_mapping
 
@@ -232,6 +232,7 @@ class EngineRig:
             client_factory=fake_client if reconnect else None,
             ros=self.ros,
             link=self._link,
+            ros_name=ros_name,
         )
 
     def _link(self, client, counts) -> FakeSimLink:

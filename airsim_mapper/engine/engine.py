@@ -79,7 +79,9 @@ class Engine:
         self.node_name = node_name  # the mapping's <node_name>
         self.ros_name = ros_name or node_name  # the node's ROS name: its status topic's, diagnostics' name
         self.namespace = namespace
-        self.node_namespace = ros_namespace(self.ros_name)  # where the mapping's relative names resolve
+        # Where the mapping's relative and private names resolve: the ROS node's namespace and own name
+        # (the mapping's <node_name> may differ, given to a wrapper).
+        self._ros_place = (ros_namespace(self.ros_name), self.ros_name.rsplit("/", 1)[-1])
         self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
         self._link = link
         self.sim = self.make_link(client)
@@ -142,7 +144,7 @@ class Engine:
     # --- building ---------------------------------------------------------------------------
     def specs_for(self, scene: Scene | None) -> tuple[BridgeSpec, ...]:
         """The bridges of `scene`, or the node's own (load_scene) without one."""
-        return expand(self.mapping, scene, self.node_name, self.namespace, self.node_namespace)
+        return expand(self.mapping, scene, self.node_name, self.namespace, *self._ros_place)
 
     def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
         """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
@@ -213,7 +215,7 @@ class Engine:
         and changed ones stop, new and changed ones start. Without a scene that is the node's own bridges.
         MappingError (nothing changed) when `mapping` does not expand over the running scene."""
         with self.lock:
-            specs = expand(mapping, self.scene, self.node_name, self.namespace, self.node_namespace)
+            specs = expand(mapping, self.scene, self.node_name, self.namespace, *self._ros_place)
             diff = bridge_diff((b.spec for b in self.bridges.values()), specs)
             self.mapping = mapping
             for name in (*diff.removed, *diff.changed):

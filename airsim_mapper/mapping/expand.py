@@ -161,18 +161,25 @@ def namespace_variables(namespace: str) -> dict[str, str]:
 
 
 def expand(
-    mapping: MappingDoc, scene: Scene | None, node_name: str, namespace: str = "", node_namespace: str = ""
+    mapping: MappingDoc,
+    scene: Scene | None,
+    node_name: str,
+    namespace: str = "",
+    node_namespace: str = "",
+    ros_node: str = "",
 ) -> tuple[BridgeSpec, ...]:
     """All concrete bridges of `mapping` over `scene` (only the node's own without one); MappingError when
-    names are illegal or collide. Names are compared as ROS resolves them for the node `node_name` in its
-    ROS namespace `node_namespace` ("" for the root): `x` and `/x` are one topic there, `~x` the node's."""
+    names are illegal or collide. Names are compared as ROS resolves them for the node `ros_node` (the last
+    part of its ROS name; `node_name`, the mapping's <node_name>, when not given) in its ROS namespace
+    `node_namespace` ("" for the root): `x` and `/x` are one topic there, `~x` the node's."""
     bridges: list[BridgeSpec] = []
     problems: list[Problem] = []
     owners: dict[str, BridgeSpec] = {}
     places = {rule.name: (rule.file or mapping.source, rule.line) for rule in mapping.rules}
     on = clock_rule_on(rule.converter for rule in mapping.rules if rule.options.enabled)
+    ros_node = ros_node or node_name
     owned = node_names(
-        node_name, namespace_variables(namespace)["namespace"], clock_rule=on, node_namespace=node_namespace
+        ros_node, namespace_variables(namespace)["namespace"], clock_rule=on, node_namespace=node_namespace
     )
     for rule in mapping.rules:
         if not rule.options.enabled:
@@ -187,7 +194,7 @@ def expand(
             bridge = _bridge(rule, key, variables, source)
             if bridge.ros is not None:
                 why = ros_name_problem(bridge.ros)
-                full = resolve_name(bridge.ros, node_name, node_namespace) if not why else bridge.ros
+                full = resolve_name(bridge.ros, ros_node, node_namespace) if not why else bridge.ros
                 taken = taken_problem(full, bridge.converter, owned)
                 if why:
                     message = f"bridge {bridge.name}: ROS name '{bridge.ros}' is not valid: {why}"

@@ -127,3 +127,26 @@ def test_a_private_name_on_the_nodes_own_service_is_refused(scene, node_namespac
     owned = f"'{node_namespace}/bridge/reload_mapping' belongs to the node's private service ~reload_mapping"
     assert owned in problem.message
     assert expand(load_mapping_text("version: 1\nrules:\n" + pose_rule("mine", "~pose")), scene, "bridge")
+
+
+def test_private_names_resolve_with_the_ros_nodes_own_name_where_the_mappings_node_name_differs(scene):
+    """A wrapper given node_name="bridge" in the ROS node /fleet/mission: `~x` is /fleet/mission/x, and
+    rospy's own ~get_loggers is /fleet/mission/get_loggers, whatever <node_name> says."""
+    from fakes import EngineRig
+
+    private = pose_rule("mine", "~<robot_name>/pose")
+    absolute = pose_rule("other", "/fleet/mission/<robot_name>/pose")
+    both = load_mapping_text("version: 1\nrules:\n" + private + absolute, "mine.yaml")
+    with pytest.raises(MappingError, match="'/fleet/mission/Drone1/pose' is also produced by mine"):
+        expand(both, scene, "bridge", "", "/fleet", "mission")
+    assert expand(both, scene, "bridge", "", "/fleet")  # as the node "bridge": /fleet/bridge/Drone1/pose
+    rospys = load_mapping_text("version: 1\nrules:\n" + pose_rule("mine", "/fleet/mission/get_loggers"))
+    with pytest.raises(MappingError, match="belongs to the node's private service ~get_loggers"):
+        expand(rospys, scene, "bridge", "", "/fleet", "mission")
+    rig = EngineRig(mapping=both, ros_name="/fleet/mission")  # the engine resolves as its ROS node
+    try:
+        assert rig.engine.node_name == "node"
+        with pytest.raises(MappingError, match="is also produced"):
+            rig.engine.specs_for(scene)
+    finally:
+        rig.engine.shutdown(timeout=2.0)
