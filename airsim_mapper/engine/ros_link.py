@@ -102,6 +102,26 @@ class StaticTf:
         self._publisher.publish(TFMessage(list(self._transforms.values())))
 
 
+ACCEPT_BACKLOG = 128  # connections the node's TCPROS port queues while it handles one
+
+
+def widen_accept_backlog(backlog: int = ACCEPT_BACKLOG) -> None:
+    """Let the node's TCPROS port queue `backlog` new connections instead of rospy's 5.
+
+    rospy's TCPROS server listens with a backlog of 5 and reads each new connection's header on its one
+    accept thread. A subscriber of many topics at once (`rosbag record` of ten topics, rviz) connects to
+    them all within milliseconds: the kernel dropped the connections beyond the fifth and their clients
+    retried a second later, so those topics started 1 s late. Listening again on the same socket only
+    changes its queue. The server is started first, as rospy does at the first publisher or service."""
+    from rospy.impl import tcpros_base
+
+    tcpros_base.start_tcpros_server()
+    server = getattr(tcpros_base._tcpros_server, "tcp_ros_server", None)
+    sock = getattr(server, "server_sock", None)
+    if sock is not None:
+        sock.listen(backlog)
+
+
 def publisher(
     name: str,
     ros_type: str,
@@ -129,6 +149,7 @@ class RosLink:
         self.tf = TfBroadcaster()
         self.static_tf = StaticTf()
         self.frames = TfLookup()
+        widen_accept_backlog()
 
     def publisher(
         self,

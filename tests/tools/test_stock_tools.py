@@ -5,6 +5,8 @@ node's or a mission script's first records is lost."""
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from harness import DEVEL_SETUP, SIM_CONFIG, Rig, stock_tool, wait_until
 
@@ -92,3 +94,70 @@ def test_a_mission_script_that_makes_the_wrapper_at_once_keeps_its_records_in_ro
     wait_until(lambda: has(loaded), 10, what="the loaded record in rosout.log")
     assert has("Connecting to simulation server"), records()[:5]
     launcher.stop(mission)
+
+
+FAST = (
+    "actual_pose",
+    "IMU1/imu",
+    "GPS/gps",
+    "Airspeed/airspeed",
+    "Barometer/barometer",
+    "Magnetometer/magnetometer",
+    "DistanceSensor/distance",
+    "Battery/battery",
+    "Chase/camera_pose",
+)
+FIRSTS = """
+import json, sys
+import rosbag
+first = {}
+for topic, _, t in rosbag.Bag(sys.argv[1]).read_messages():
+    first.setdefault(topic, t.to_sec())
+print(json.dumps(first))
+"""
+
+
+def connections_queued(rig: Rig, topic: str, count: int = 12) -> int:
+    """How many of `count` TCP connections opened at once to the node publishing `topic` get through while
+    the node reads the first one's header (it never comes), each given 0.5 s."""
+    import contextlib
+    import socket
+    import xmlrpc.client
+
+    master = xmlrpc.client.ServerProxy(rig.env["ROS_MASTER_URI"])
+    _, _, (publishers, _, _) = master.getSystemState("/probe")
+    (node,) = next(nodes for name, nodes in publishers if name == topic)
+    _, _, node_uri = master.lookupNode("/probe", node)
+    _, _, (_, host, port) = xmlrpc.client.ServerProxy(node_uri).requestTopic("/probe", topic, [["TCPROS"]])
+    opened: list[socket.socket] = []
+    try:
+        for _ in range(count):
+            with contextlib.suppress(OSError):
+                opened.append(socket.create_connection((host, port), timeout=0.5))
+        return len(opened)
+    finally:
+        for sock in opened:
+            sock.close()
+
+
+def test_a_bag_of_many_topics_starts_every_topic_at_once(launcher: Rig) -> None:
+    """`rosbag record` of twelve topics connects to the node twelve times within milliseconds: each topic
+    starts with the others (rospy's TCPROS port queued 5 new connections, and those beyond started 1 s
+    late, when their clients tried again)."""
+    launcher.roscore()
+    sim = launcher.simserver()
+    node = launcher.node(sim.ports, "--scene", "scene_drone_sensors.jsonc")
+    topics = [f"/airsim_node/Drone1/{name}" for name in FAST] + ["/clock", "/tf", "/tf_static"]
+    launcher.wait_topics(topics, node)
+    assert connections_queued(launcher, topics[0]) == 12  # with rospy's backlog of 5: 7
+    bag = launcher.workdir / "many.bag"
+    record = stock_tool(launcher, f"/usr/bin/rosbag record -q --duration=3 -O {bag} {' '.join(topics)}")
+    assert record.returncode == 0, record.stderr
+    (launcher.workdir / "firsts.py").write_text(FIRSTS)
+    read = stock_tool(launcher, f"/usr/bin/python3 firsts.py {bag}")
+    assert read.returncode == 0, read.stderr
+    first = json.loads(read.stdout)
+    assert set(first) == set(topics)
+    start = min(first.values())
+    late = {topic: round(t - start, 3) for topic, t in first.items() if t - start > 0.5}
+    assert not late, f"topics whose first message came late (s): {late}"
