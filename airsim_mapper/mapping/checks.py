@@ -223,3 +223,11 @@ def check_rules(
     checked = [checker.rule(rule, index) for rule, index in zip(rules, indexes)]
     checker.across(checked, indexes)
     return checker.problems, checked
+
+
+def template_problems(rule: Rule, index: int, data: dict[str, Any], marks: Marks, file: str) -> list[Problem]:
+    """The template problems alone of `rule` (at `index` of data['rules']): for a rule the schema refused,
+    built from its other keys."""
+    checker = _Checker(data, marks, file)
+    checker._templates(rule, ("rules", index))
+    return checker.problems

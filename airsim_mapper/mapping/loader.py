@@ -13,11 +13,11 @@ from typing import Any
 
 from airsim_mapper.files import ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
-from airsim_mapper.mapping.checks import check_rules
+from airsim_mapper.mapping.checks import check_rules, template_problems
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.extends import is_bare_name, resolve, shipped_hint
 from airsim_mapper.mapping.match import selections_of
-from airsim_mapper.mapping.model import Limits, Mapping, Options, PositionBox, Rule, TfSpec
+from airsim_mapper.mapping.model import DOMAIN_VARIABLES, Limits, Mapping, Options, PositionBox, Rule, TfSpec
 from airsim_mapper.mapping.origins import Origins, file_of, located
 from airsim_mapper.mapping.reserved import literal_problem
 from airsim_mapper.mapping.schema import schema_problems
@@ -79,6 +79,12 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     indexes = [index for index in range(len(data["rules"])) if index not in bad_rules]
     semantic, rules = check_rules(rules, indexes, data, marks, file)
     problems += semantic
+    for index in sorted(bad_rules):  # their templates too, so that one run shows every mistake
+        bad_keys = {path[2] for path, _ in schema_found if len(path) > 2 and path[:2] == ("rules", index)}
+        line, origin = marks.value(("rules", index))[0], file_of(marks, ("rules", index), file)
+        partial = _partial_rule(data["rules"][index], bad_keys, defaults, convention, line, origin)
+        if partial is not None:
+            problems += template_problems(partial, index, data, marks, file)
     for rule, index in zip(rules, indexes):
         why = literal_problem(rule.ros) if rule.options.enabled else ""
         if why:
@@ -106,6 +112,24 @@ def _options(raw: dict[str, Any], base: Options) -> Options:
     limits = Limits(**{key: limits_raw.get(key, getattr(base.limits, key)) for key in LIMIT_KEYS})
     values["queue_size"] = int(values["queue_size"])
     return Options(**values, limits=limits)
+
+
+def _partial_rule(
+    raw: Any, bad_keys: set[Any], defaults: Options, convention: str, line: int, file: str
+) -> Rule | None:
+    """A rule with schema problems, without its bad keys: enough to check its templates, or None when its
+    name or for_each is not usable."""
+    if not isinstance(raw, dict):
+        return None
+    keep = {key: value for key, value in raw.items() if key not in bad_keys}
+    if not isinstance(keep.get("name"), str) or keep.get("for_each") not in DOMAIN_VARIABLES:
+        return None
+    keep.setdefault("direction", "")
+    keep.setdefault("converter", "")
+    try:
+        return _rule(keep, defaults, convention, line, file)
+    except (KeyError, TypeError, ValueError, AttributeError):  # another key it needs is unusable
+        return None
 
 
 def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, file: str) -> Rule:
