@@ -62,12 +62,36 @@ def _mark(node: yaml.Node) -> tuple[int, int]:
     return (node.start_mark.line + 1, node.start_mark.column + 1)
 
 
+# PyYAML's words for the commonest indentation mistakes -> what they mean in a mapping file
+PLAIN_PROBLEMS = (
+    (
+        "expected <block end>",
+        "this line is indented differently from the lines above it (the keys of one mapping, and the "
+        "items of one list, start in the same column)",
+    ),
+    (
+        "mapping values are not allowed here",
+        "a ':' where no key can start: is this line indented deeper than the key above it, or does a "
+        "value hold ': ' and need quotes?",
+    ),
+    (
+        "could not find expected ':'",
+        "a key without its ':', or a line indented under a value as if it continued it",
+    ),
+)
+
+
 def _yaml_problem(file: str, err: yaml.YAMLError) -> Problem:
     mark = getattr(err, "problem_mark", None) or getattr(err, "context_mark", None)
     problem = getattr(err, "problem", None) or str(err)
     context = getattr(err, "context", None)
     if "'\\t'" in problem:
-        problem = "a tab character; YAML allows only spaces for indentation"
+        problem, context = "a tab character; YAML allows only spaces for indentation", None
+    plain = next((words for start, words in PLAIN_PROBLEMS if problem.startswith(start)), None)
+    if plain is not None:
+        if problem.startswith("could not find") and getattr(err, "context_mark", None) is not None:
+            mark = err.context_mark  # the key that lacks its ':', not the line after it
+        problem, context = plain, f"YAML: {problem}"
     text = f"invalid YAML: {problem}" + (f" ({context})" if context else "")
     if mark is None:
         return Problem(file, 1, 1, text)
