@@ -151,18 +151,7 @@ class RosLink:
         self.frames = TfLookup()
         widen_accept_backlog()
 
-    def publisher(
-        self,
-        name: str,
-        ros_type: str,
-        *,
-        queue_size: int,
-        latch: bool = False,
-        on_peers: Callable[[], None] | None = None,
-    ) -> Any:
-        """A publisher (`publish`, `get_num_connections`, `unregister`); `on_peers` runs whenever a
-        subscriber connects or leaves."""
-        return publisher(name, ros_type, queue_size=queue_size, latch=latch, on_peers=on_peers)
+    publisher = staticmethod(publisher)  # (`publish`, `get_num_connections`, `unregister`)
 
     def subscriber(
         self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int
