@@ -125,27 +125,40 @@ def open_client(
     return client
 
 
-CONNECT_LINE = "Connecting to simulation"  # how the client's connect() announces each attempt
+CONNECT_LINE = "Connecting to simulation server"  # how the client's connect() announces each attempt
+
+
+class _QuietConnects(logging.Filter):
+    """Drops the client's connect line on the threads that are retrying (`quiet`, per thread)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.quiet = threading.local()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not (getattr(self.quiet, "on", False) and str(record.msg).startswith(CONNECT_LINE))
+
+
+_QUIET = _QuietConnects()
+_QUIET_LOCK = threading.Lock()
 
 
 @contextlib.contextmanager
 def retry_quietly(quiet: bool = True) -> Iterator[None]:
     """While a retry runs on this thread (`quiet`), the client's own "Connecting to simulation server"
     line is left out: the retry logs one line of its own per attempt, not two."""
-    if not quiet:
-        yield
-        return
-    thread = threading.get_ident()
-
-    def keep(record: logging.LogRecord) -> bool:
-        return record.thread != thread or not str(record.msg).startswith(CONNECT_LINE)
-
     logger = logging.getLogger("projectairsim")
-    logger.filters.insert(0, keep)  # before the wrapper's redirect to rosout, which passes records on
+    with _QUIET_LOCK:
+        if _QUIET not in logger.filters:
+            # First, before the wrapper's redirect to rosout (which passes records on); a new list, so that
+            # a thread logging meanwhile goes on over the old one.
+            logger.filters = [_QUIET, *logger.filters]
+    before = getattr(_QUIET.quiet, "on", False)
+    _QUIET.quiet.on = quiet or before
     try:
         yield
     finally:
-        logger.removeFilter(keep)
+        _QUIET.quiet.on = before
 
 
 def _silent(address: str, ports: tuple[int, int], seconds: float) -> SimUnreachable:

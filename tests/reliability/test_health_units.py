@@ -6,6 +6,7 @@ from __future__ import annotations
 import logging
 import math
 import socket
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -106,36 +107,92 @@ def test_opening_a_client_where_no_simulator_runs_raises_sim_unreachable_saying_
         open_client("no.such.host.invalid", port, port)
 
 
-def test_connect_retries_with_backoff_and_gives_up_when_ros_shuts_down(caplog):
-    redirect_client_log()  # as in the node: the client's records go on to rosout.projectairsim
+@pytest.fixture
+def redirected():
+    """The client's records redirected to rosout.projectairsim, as in the node; its filters put back after."""
+    client_log = logging.getLogger("projectairsim")
+    before = list(client_log.filters)
+    redirect_client_log()
+    yield client_log
+    client_log.filters = before
+
+
+def test_connect_retries_with_backoff_and_gives_up_when_ros_shuts_down(caplog, redirected):
     port = free_port()
     slept: list[float] = []
     with caplog.at_level(logging.INFO):
         result = connect("127.0.0.1", port, port, lambda: len(slept) >= 4, sleep=slept.append)
+        redirected.info(f"{CONNECT_LINE} at 127.0.0.1 (after the retries)")
     assert result is None
     assert slept == [0.25, 0.5, 0.5, 0.5]
     lines = [r.getMessage() for r in caplog.records if "waiting for it" in r.getMessage()]
     assert len(lines) == 4 and "attempt 4, next in 0.5 s" in lines[-1]
-    # One line per attempt: the client announces the first, the retries only say they wait.
-    announced = [r for r in caplog.records if r.getMessage().startswith(CONNECT_LINE)]
-    assert len(announced) == 1 and announced[0].name == "projectairsim"
-    kept = logging.getLogger("projectairsim").filters  # the quiet ends with the retries
-    assert len(kept) == 1 and getattr(kept[0], "airsim_mapper", False)
+    # One line per attempt: the client announces the first, the retries only say they wait; the quiet
+    # ends with the retries.
+    announced = [r.getMessage() for r in caplog.records if r.getMessage().startswith(CONNECT_LINE)]
+    assert announced == [f"{CONNECT_LINE} at 127.0.0.1", f"{CONNECT_LINE} at 127.0.0.1 (after the retries)"]
 
 
-def test_a_quiet_retry_leaves_other_threads_connect_lines_alone(caplog):
+def test_a_quiet_retry_leaves_other_threads_connect_lines_alone(caplog, redirected):
     port = free_port()
-    client_log = logging.getLogger("projectairsim")
     other: list[threading.Thread] = []
     with caplog.at_level(logging.INFO), retry_quietly():
         with pytest.raises(SimUnreachable):
             open_client("127.0.0.1", port, port)
-        other.append(threading.Thread(target=client_log.info, args=(f"{CONNECT_LINE} server at elsewhere",)))
+        other.append(threading.Thread(target=redirected.info, args=(f"{CONNECT_LINE} at elsewhere",)))
         other[0].start()
         other[0].join()
     assert [r.getMessage() for r in caplog.records if r.getMessage().startswith(CONNECT_LINE)] == [
-        f"{CONNECT_LINE} server at elsewhere"
+        f"{CONNECT_LINE} at elsewhere"
     ]
+
+
+def test_records_keep_their_way_to_rosout_while_retries_come_and_go(redirected):
+    """Another thread's records all go through the redirect while a retry begins and ends over and over
+    (taking the quiet filter out of the logger's list had let some skip it)."""
+
+    class Count(logging.Handler):
+        def __init__(self) -> None:
+            super().__init__()
+            self.seen = 0
+
+        def emit(self, record: logging.LogRecord) -> None:
+            self.seen += 1
+
+    target = logging.getLogger("rosout.projectairsim")
+    passed, skipped = Count(), Count()  # through the redirect; past it, to the client logger's own
+    loggers = ((target, passed), (redirected, skipped))
+    saved = [(logger, logger.propagate) for logger, _ in loggers]
+    for logger, handler in loggers:
+        logger.addHandler(handler)
+        logger.propagate = False  # nothing reaches the root logger's handlers
+    stop = threading.Event()
+    sent: list[int] = []
+
+    def spam() -> None:
+        n = 0
+        while not stop.is_set():
+            redirected.error("tick")
+            n += 1
+        sent.append(n)
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # the two threads take turns as often as they can
+    spammer = threading.Thread(target=spam)
+    try:
+        spammer.start()
+        end = time.monotonic() + 2.0
+        while time.monotonic() < end:
+            with retry_quietly():
+                pass
+        stop.set()
+        spammer.join()
+    finally:
+        sys.setswitchinterval(interval)
+        for (logger, handler), (_, propagate) in zip(loggers, saved, strict=True):
+            logger.removeHandler(handler)
+            logger.propagate = propagate
+    assert (passed.seen, skipped.seen) == (sent[0], 0)
 
 
 def test_a_dead_link_fails_every_call_at_once_and_only_remembers_subscriptions():
