@@ -3,6 +3,7 @@ subscribers, services, the clock) and batched tf."""
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import select
 import threading
@@ -112,14 +113,18 @@ def widen_accept_backlog(backlog: int = ACCEPT_BACKLOG) -> None:
     accept thread. A subscriber of many topics at once (`rosbag record` of ten topics, rviz) connects to
     them all within milliseconds: the kernel dropped the connections beyond the fifth and their clients
     retried a second later, so those topics started 1 s late. Listening again on the same socket only
-    changes its queue. The server is started first, as rospy does at the first publisher or service."""
+    changes its queue. The server is started first, as rospy does at the first publisher or service; before
+    `init_node` (which sets its port) and after shutdown (which closes it) nothing is done."""
     from rospy.impl import tcpros_base
 
+    if not rospy.core.is_initialized() or rospy.is_shutdown():
+        return
     tcpros_base.start_tcpros_server()
     server = getattr(tcpros_base._tcpros_server, "tcp_ros_server", None)
     sock = getattr(server, "server_sock", None)
     if sock is not None:
-        sock.listen(backlog)
+        with contextlib.suppress(OSError):  # closed by a shutdown meanwhile
+            sock.listen(backlog)
 
 
 def publisher(
