@@ -62,8 +62,14 @@ def _mark(node: yaml.Node) -> tuple[int, int]:
     return (node.start_mark.line + 1, node.start_mark.column + 1)
 
 
+MISSING_COLON = "could not find expected ':'"
 # PyYAML's words for the commonest indentation mistakes -> what they mean in a mapping file
 PLAIN_PROBLEMS = (
+    (
+        "expected <block end>, but found '-'",
+        "a list item ('- ') where the mapping above expects its next key (a rule's keys after its first "
+        "take no '- ')",
+    ),
     (
         "expected <block end>",
         "this line is indented differently from the lines above it (the keys of one mapping, and the "
@@ -75,7 +81,7 @@ PLAIN_PROBLEMS = (
         "value hold ': ' and need quotes?",
     ),
     (
-        "could not find expected ':'",
+        MISSING_COLON,
         "a key without its ':', or a line indented under a value as if it continued it",
     ),
 )
@@ -87,11 +93,12 @@ def _yaml_problem(file: str, err: yaml.YAMLError) -> Problem:
     context = getattr(err, "context", None)
     if "'\\t'" in problem:
         problem, context = "a tab character; YAML allows only spaces for indentation", None
-    plain = next((words for start, words in PLAIN_PROBLEMS if problem.startswith(start)), None)
-    if plain is not None:
-        if problem.startswith("could not find") and getattr(err, "context_mark", None) is not None:
+    known = next(((start, words) for start, words in PLAIN_PROBLEMS if problem.startswith(start)), None)
+    if known is not None:
+        start, words = known
+        if start == MISSING_COLON and getattr(err, "context_mark", None) is not None:
             mark = err.context_mark  # the key that lacks its ':', not the line after it
-        problem, context = plain, f"YAML: {problem}"
+        problem, context = words, f"YAML: {problem}"
     text = f"invalid YAML: {problem}" + (f" ({context})" if context else "")
     if mark is None:
         return Problem(file, 1, 1, text)
