@@ -220,7 +220,8 @@ def test_a_reset_while_paused_moves_the_pose_topic_and_sends_tf_no_transform_twi
             wait_until(lambda: np.allclose(pose.position, [0.0, 0.0, -4.0], atol=0.05), 10, what="the reset")
             time.sleep(0.3)
         finally:
-            assert call("/airsim_node/pause", False).success
+            resumed = call("/airsim_node/pause", False)
+        assert resumed.success
         wait_until(lambda: abs(sent[-1][1]) < 0.05, 10, what="the reset pose on /tf after the pause")
         stamps = [stamp for stamp, _ in sent]
         assert len(stamps) == len(set(stamps)), "a transform sent twice at one time"

@@ -163,10 +163,11 @@ def test_a_bag_of_many_topics_starts_every_topic_at_once(launcher: Rig) -> None:
     first, stamps = json.loads(read.stdout).values()
     assert set(first) == set(topics)
     start = min(t for topic, t in first.items() if not topic.startswith(CAMERA))  # lazy: it starts later
-    late = {t: round(first[t] - start, 3) for t in topics if first[t] - start > 0.5 and CAMERA not in t}
+    late = {t: round(first[t] - start, 3) for t in topics if first[t] - start > 0.8 and CAMERA not in t}
     assert not late, f"topics whose first message came late (s): {late}"
-    # every image has its camera_info from the first on (the two connections used to start 1 s apart);
-    # the recording's end may cut one of the last pair
+    # the camera's image and camera_info start together (their connections used to start 1 s apart); a
+    # busy host may drop one of either later (queue_size 1), so only the start is compared
     images, infos = set(stamps[f"{CAMERA}/image"]), set(stamps[f"{CAMERA}/camera_info"])
     assert len(images & infos) > 10
-    assert all(stamp > max(images & infos) for stamp in images ^ infos), sorted(images ^ infos)
+    paired = min(images & infos)
+    assert not [stamp for stamp in images ^ infos if stamp < paired], sorted(images ^ infos)[:5]
