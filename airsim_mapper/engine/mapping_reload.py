@@ -38,6 +38,9 @@ def stamps(files: Sequence[str]) -> dict[str, Stamp]:
     return {path: stamp(path) for path in files}
 
 
+APPLIED, PARTIAL = "applied", "partial"
+
+
 @dataclass
 class Outcome:
     """One reload: applied (with the difference) or rejected (with the located errors)."""
@@ -58,7 +61,9 @@ class MappingReport:
     """What the status topic and /diagnostics say about the mapping."""
 
     file: str
-    state: str = "loaded"  # "loaded", "applied" (a reload) or "rejected" (the last reload)
+    # "loaded"; after a reload "applied", "partial" (applied, but bridges it added or changed could not
+    # start: `errors` names them) or "rejected" (nothing changed: `errors` are the located problems)
+    state: str = "loaded"
     reloads: int = 0
     rejections: int = 0
     errors: list[str] = field(default_factory=list)
@@ -119,7 +124,8 @@ class MappingReloader:
                 f"bridge {name} could not start: {why}" for name, why in refused.items() if name in touched
             ]
             report = self.report
-            report.state, report.errors, report.last_change = "applied", errors, diff.summary()
+            report.state = PARTIAL if errors else APPLIED
+            report.errors, report.last_change = errors, diff.summary()
             report.reloads += 1
             self._publish()
         log.info("mapping %s reloaded (%s): %s", mapping.source, why, diff.summary())

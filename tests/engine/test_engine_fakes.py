@@ -200,6 +200,7 @@ def test_a_bridge_ros_refuses_at_run_time_is_an_error_in_the_reload_answer_and_o
     assert outcome.errors == (f"bridge extra_pose[Drone1] could not start: {why}",)
     assert outcome.message == f"applied: 1 added, 0 removed, 0 changed, 73 unchanged\n{outcome.errors[0]}"
     assert rig.engine.refused_bridges() == {"extra_pose[Drone1]": why}
+    assert rig.engine.mapping_report["state"] == "partial"  # applied, with a bridge that did not start
     status = mapping_status(rig.engine.mapping_report, "node: ")
     assert (status["level"], status["message"]) == (ERROR, f"applied; {outcome.errors[0]}")
     assert refused_status("extra_pose[Drone1]", why, "node: ")["level"] == ERROR
@@ -207,6 +208,7 @@ def test_a_bridge_ros_refuses_at_run_time_is_an_error_in_the_reload_answer_and_o
     mine.write_text(EXTRA.format(ros="/elsewhere/pose") + "# touched\n")
     again = reloader.reload()
     assert again.ok and rig.engine.refused_bridges() == {} and "extra_pose[Drone1]" in rig.engine.bridges
+    assert rig.engine.mapping_report["state"] == "applied"
 
 
 def test_a_reload_taking_a_name_the_node_owns_is_refused_whole(rig, tmp_path):
