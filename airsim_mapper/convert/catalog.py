@@ -68,6 +68,7 @@ class ConverterInfo:
     example: Example | None = None  # what the property tests start from (every entry has one)
     max_pixels: bool = False  # takes the rule's params.max_pixels and params.max_bytes (images)
     inline: bool = False  # light: a few fields in, one small message out; run on the receive thread
+    events: bool = False  # the simulator sends one only when something happens: silence is no fault
     # params it cannot run without, with what each is
     required_params: Mapping[str, str] = field(default_factory=dict)
     # params with a fixed set of values: each value with the simulator method it goes with ("" for any)
@@ -168,6 +169,7 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "collision",
             "sim CollisionInfo -> PointStamped of the impact point (world frame)",
             inline=True,
+            events=True,
             example=_e({**STAMP, "object_name": "x", "impact_point": {"x": 1.0, "y": 2.0, "z": 3.0}}),
         ),
         _c(

@@ -8,6 +8,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from airsim_mapper.convert import catalog
 from airsim_mapper.engine.bridges import Bridge, SimToRos
 from airsim_mapper.logs import ros_logger
 
@@ -31,8 +32,11 @@ def bridge_status(bridge: Bridge, seen: _Seen, now: float, drops: int, prefix: s
     new_errors = stats.errors - seen.errors
     attached = getattr(bridge, "_attached", None)
     age = now - stats.last_time if stats.last_time else None
+    info = catalog.find(bridge.spec.converter)
     if new_errors:
         level, message = ERROR, f"{new_errors} errors: {stats.last_error}"
+    elif attached and info is not None and info.events:  # quiet until something happens
+        level, message = OK, "no event yet" if age is None else f"last event {age:.1f} s ago"
     elif attached and (age is None or age > STALE_AFTER_S):
         level, message = WARN, "no data from the simulator" if age is None else f"stale for {age:.1f} s"
     elif attached is False and isinstance(bridge, SimToRos):

@@ -68,7 +68,7 @@ def test_nothing_is_built_while_nobody_subscribes_and_the_next_rate_starts_from_
     monkeypatch.setattr(rospy.Time, "now", staticmethod(lambda: rospy.Time(1)))
     bridge = SimpleNamespace(
         stats=SimpleNamespace(messages=0, errors=0, last_time=0.0, last_error="", stale_dropped=0, clamped=0),
-        spec=SimpleNamespace(direction="sim_to_ros", sim="/s", ros="/r", name="imu"),
+        spec=SimpleNamespace(direction="sim_to_ros", sim="/s", ros="/r", name="imu", converter="imu"),
         _attached=False,
     )
     made = diagnostics(hub=SimpleNamespace(streams=dict))
@@ -85,3 +85,26 @@ def test_nothing_is_built_while_nobody_subscribes_and_the_next_rate_starts_from_
     [status] = [s for s in array.status if s.name == "node: imu"]
     values = {kv.key: kv.value for kv in status.values}
     assert (values["messages"], values["rate_hz"]) == ("700", "100.00")
+
+
+def test_a_silent_event_stream_is_ok_and_a_silent_sensor_stream_a_warning():
+    """Collisions come only when something collides: a subscribed collision topic with nothing on it is
+    normal, where a subscribed IMU with nothing on it is a fault."""
+    from airsim_mapper.engine.bridges import BridgeStats
+    from airsim_mapper.engine.diagnostics import WARN, _Seen, bridge_status
+
+    def status(converter: str, last_time: float = 0.0) -> dict:
+        spec = SimpleNamespace(
+            name=f"{converter}[Drone1]",
+            converter=converter,
+            direction="sim_to_ros",
+            sim="/Sim/s/robots/Drone1/x",
+            ros="/airsim_node/Drone1/x",
+        )
+        bridge = SimpleNamespace(stats=BridgeStats(last_time=last_time), spec=spec, _attached=True)
+        return bridge_status(bridge, _Seen(), 100.0, 0, "node: ")
+
+    assert (status("collision")["level"], status("collision")["message"]) == (OK, "no event yet")
+    assert status("collision", last_time=40.0)["message"] == "last event 60.0 s ago"
+    assert (status("imu")["level"], status("imu")["message"]) == (WARN, "no data from the simulator")
+    assert status("imu", last_time=40.0)["message"] == "stale for 60.0 s"
