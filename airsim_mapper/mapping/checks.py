@@ -215,19 +215,23 @@ class _Checker:
 
 
 def check_rules(
-    rules: Sequence[Rule], indexes: Sequence[int], data: dict[str, Any], marks: Marks, file: str
+    rules: Sequence[Rule],
+    indexes: Sequence[int],
+    data: dict[str, Any],
+    marks: Marks,
+    file: str,
+    refused: Sequence[tuple[Rule, int]] = (),
 ) -> tuple[list[Problem], list[Rule]]:
-    """All semantic problems of `rules` (at `indexes` of data['rules']), and the rules with their ros_kind."""
+    """All semantic problems of `rules` (at `indexes` of data['rules']), and the rules with their ros_kind.
+
+    `refused` are the rules the schema refused, each built from its other keys with its index: their
+    templates are checked, and they take part in the checks across rules (a name used twice is found
+    whichever of the two the schema refused)."""
     checker = _Checker(data, marks, file)
     checker.position_box(("defaults",), data.get("defaults", {}).get("limits"), "defaults")
     checked = [checker.rule(rule, index) for rule, index in zip(rules, indexes)]
-    checker.across(checked, indexes)
+    for rule, index in refused:
+        checker._templates(rule, ("rules", index))
+    every = sorted([*zip(checked, indexes), *refused], key=lambda pair: pair[1])
+    checker.across([rule for rule, _ in every], [index for _, index in every])
     return checker.problems, checked
-
-
-def template_problems(rule: Rule, index: int, data: dict[str, Any], marks: Marks, file: str) -> list[Problem]:
-    """The template problems alone of `rule` (at `index` of data['rules']): for a rule the schema refused,
-    built from its other keys."""
-    checker = _Checker(data, marks, file)
-    checker._templates(rule, ("rules", index))
-    return checker.problems

@@ -13,7 +13,7 @@ from typing import Any
 
 from airsim_mapper.files import ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
-from airsim_mapper.mapping.checks import check_rules, template_problems
+from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.extends import is_bare_name, resolve, shipped_hint
 from airsim_mapper.mapping.match import selections_of
@@ -77,14 +77,15 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
         if index not in bad_rules
     ]
     indexes = [index for index in range(len(data["rules"])) if index not in bad_rules]
-    semantic, rules = check_rules(rules, indexes, data, marks, file)
-    problems += semantic
-    for index in sorted(bad_rules):  # their templates too, so that one run shows every mistake
+    refused: list[tuple[Rule, int]] = []  # built from their other keys, so that one run shows every mistake
+    for index in sorted(bad_rules):
         bad_keys = {path[2] for path, _ in schema_found if len(path) > 2 and path[:2] == ("rules", index)}
         line, origin = marks.value(("rules", index))[0], file_of(marks, ("rules", index), file)
         partial = _partial_rule(data["rules"][index], bad_keys, defaults, convention, line, origin)
         if partial is not None:
-            problems += template_problems(partial, index, data, marks, file)
+            refused.append((partial, index))
+    semantic, rules = check_rules(rules, indexes, data, marks, file, refused)
+    problems += semantic
     for rule, index in zip(rules, indexes):
         why = literal_problem(rule.ros) if rule.options.enabled else ""
         if why:
