@@ -163,3 +163,46 @@ def test_the_bridge_cpu_per_frame_is_judged_against_receiving_and_publishing_it_
     # (0.35 - 0.05) / 30 = 10 ms a frame, against 4.5 ms to receive it and 3 ms to publish it
     assert round(row["value"], 3) == 1.333 and row["met"] is False
     assert "receive 4.5 + publish 3.0 ms" in row["note"] and "publisher alone: 3.33x" in row["note"]
+
+
+def _round(bridge_p99: float, forwarder_p99: float, floor_p99: float, bridge_cores: float) -> dict:
+    poses = [scenes.pose_topic(i) for i in (1, 2)]
+    return {
+        "forwarder": _result("forwarder", 0.1, {name: (100.0, forwarder_p99) for name in poses}),
+        "receive_floor": _result("receiver", 0.05, {name: (100.0, floor_p99) for name in poses}),
+        "bridge": _result("bridge", bridge_cores, {name: (100.0, bridge_p99) for name in poses}),
+    }
+
+
+def test_the_pose_latency_targets_are_judged_on_the_median_of_the_interleaved_rounds():
+    e2e = _e2e()  # round 1: camera p99 6 / 10 ms (0.6x); two drones 3 / 3 ms at 0.2 cores
+    camera = [_result("bridge", 0.3, {POSE: (100.0, p99), IMAGE: (30.0, 20.0)}) for p99 in (9.0, 12.0)]
+    forwarded = [_result("forwarder", 0.2, {POSE: (100.0, 10.0), IMAGE: (30.0, 15.0)}) for _ in camera]
+    e2e["rounds"] = {
+        "camera": [{"bridge": b, "forwarder": f} for b, f in zip(camera, forwarded)],
+        "scale": [_round(5.0, 6.0, 4.5, 0.3), _round(4.5, 6.0, 4.2, 0.26)],
+    }
+    rows = {t["target"]: t for t in report.floor_targets(e2e)}
+    camera_row = rows["pose p99 under a 1080p camera @30 / the forwarder's"]
+    assert round(camera_row["value"], 3) == 0.9 and camera_row["met"] is False  # 0.6, 0.9, 1.2
+    assert camera_row["note"].startswith("median of 3 interleaved rounds (0.60x, 0.90x, 1.20x); round 1: ")
+    p99 = rows["2 drones: worst pose p99"]
+    assert p99["value"] == 4.5 and p99["met"] is False  # 3.0, 5.0, 4.5
+    assert "(3.00 ms, 5.00 ms, 4.50 ms)" in p99["note"]
+    cpu = rows["2 drones: bridge CPU"]
+    assert cpu["value"] == 0.26 and cpu["met"] is False  # 0.2, 0.3, 0.26
+    assert cpu["note"].endswith(
+        "their medians: bare forwarder 0.100 cores; the bridge's receive loop alone, no ROS: 0.050 cores"
+    )
+    # the receive loop was measured in rounds 2 and 3 only: its median is over those
+    assert "4.35 ms" in (report.floor_over_target(e2e) or "")
+    table = report.rounds_table(e2e)
+    assert "1080p camera @30 + pose, round 3" in table and "12.00 / 10.00 / -" in table
+    assert "10 drones, round 2" in table and "5.00 / 6.00 / 4.50" in table and "0.300 / 0.100" in table
+
+
+def test_with_one_round_there_is_no_rounds_table_and_the_round_is_the_figure():
+    e2e = _e2e()
+    assert report.rounds_table(e2e) == ""
+    rows = {t["target"]: t for t in report.floor_targets(e2e)}
+    assert not rows["2 drones: worst pose p99"]["note"].startswith("median")
