@@ -48,7 +48,7 @@ class _Checker:
             self._converter_fit(rule, info, base)
             self._params(rule, info, base)
         self._sides(rule, info, base)
-        self._templates(rule, base)
+        self.templates(rule, base)
         self._options(rule, base)
         for path, at_key, message in match_problems(self.data["rules"][index].get("match"), rule.domain):
             self.add((*base, "match", *path), f"rule '{rule.name}': {message}", at_key)
@@ -116,7 +116,8 @@ class _Checker:
         elif rule.ros_type is None:
             self.add((*base, "ros"), f"rule '{rule.name}': 'type' is required when 'ros' is set")
 
-    def _templates(self, rule: Rule, base: tuple[Any, ...]) -> None:
+    def templates(self, rule: Rule, base: tuple[Any, ...]) -> None:
+        """The rule's template mistakes (malformed, unknown variables) and a `ros` that is no ROS name."""
         allowed = DOMAIN_VARIABLES[rule.domain]
         fields = {("sim",): rule.sim, ("ros",): rule.ros, ("frame_id",): rule.frame_id}
         if rule.tf is not None:
@@ -231,7 +232,7 @@ def check_rules(
     checker.position_box(("defaults",), data.get("defaults", {}).get("limits"), "defaults")
     checked = [checker.rule(rule, index) for rule, index in zip(rules, indexes)]
     for rule, index in refused:
-        checker._templates(rule, ("rules", index))
+        checker.templates(rule, ("rules", index))
     every = sorted([*zip(checked, indexes), *refused], key=lambda pair: pair[1])
     checker.across([rule for rule, _ in every], [index for _, index in every])
     return checker.problems, checked

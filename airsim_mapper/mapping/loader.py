@@ -28,6 +28,12 @@ from airsim_mapper.resources import mapping_path
 DEFAULT_IMAGE_TYPES: dict[int, str] = dict(DOCUMENTED_IMAGE_TYPES)
 OPTION_KEYS = tuple(field.name for field in fields(Options) if field.name != "limits")
 LIMIT_KEYS = tuple(field.name for field in fields(Limits))
+# The keys whose mistake leaves a rule publishing its `ros` for every item of its for_each: all but
+# `enabled` and `match`.
+PUBLISHING_KEYS = frozenset(
+    {"name", "for_each", "direction", "converter", "sim", "ros", "type", "frame_id", "tf", "convention"}
+    | {"params", "limits", *OPTION_KEYS}
+) - {"enabled"}
 
 
 def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
@@ -125,6 +131,8 @@ def _partial_rule(
     keep = {key: value for key, value in raw.items() if key not in bad_keys}
     if not isinstance(keep.get("name"), str) or keep.get("for_each") not in DOMAIN_VARIABLES:
         return None
+    if not bad_keys <= PUBLISHING_KEYS:  # a bad `enabled` or `match`, or a misspelt key that may be either:
+        keep["enabled"] = False  # whether it publishes its `ros` is unknown, so no duplicate is claimed
     keep.setdefault("direction", "")
     keep.setdefault("converter", "")
     try:

@@ -272,3 +272,37 @@ def test_first_message_is_fresh_by_default_and_a_rule_may_keep_the_cached_one():
     assert (cmd.options.first_message, pose.options.first_message) == ("fresh", "cached")
     with pytest.raises(MappingError, match="first_message"):
         load_mapping_text(text.replace("first_message: cached", "first_message: stale"), "m.yaml")
+
+
+POSE_RULE = """  - name: {name}
+    for_each: robot
+    direction: sim_to_ros
+    converter: pose
+    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose
+    ros: /x/<robot_name>/pose
+    type: geometry_msgs/PoseStamped
+{extra}"""
+
+
+def _problems(*rules: tuple[str, str]) -> list[str]:
+    text = "version: 1\nrules:\n" + "".join(POSE_RULE.format(name=name, extra=extra) for name, extra in rules)
+    with pytest.raises(MappingError) as caught:
+        load_mapping_text(text, "m.yaml")
+    return [problem.split(": ", 1)[1] for problem in str(caught.value).splitlines()]
+
+
+def test_a_rule_the_schema_refuses_still_counts_in_the_duplicate_checks_when_it_would_publish():
+    problems = _problems(("pose", "    queue_size: 0\n"), ("pose", ""))
+    assert any("duplicate rule name 'pose'" in p for p in problems)
+    assert any("ROS name '/x/<robot_name>/pose' is also produced by rule 'pose'" in p for p in problems)
+
+
+@pytest.mark.parametrize(
+    "mistake",
+    ['    enabled: "false"\n', "    enabeld: false\n", "    match: {robot_name: 5}\n"],
+    ids=["bad_enabled", "misspelt_key", "bad_match"],
+)
+def test_a_refused_rule_that_may_not_publish_its_ros_claims_no_duplicate_ros_name(mistake):
+    problems = _problems(("first", mistake), ("second", ""))
+    assert len(problems) == 1 and "rules[0] 'first'" in problems[0]  # the schema's own, alone
+    assert any("duplicate rule name" in p for p in _problems(("same", mistake), ("same", "")))
