@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import time
 from collections.abc import Callable
 from typing import Any
@@ -25,7 +24,7 @@ import numpy as np
 
 from airsim_mapper.engine.fast_frames import parse_frame_header
 from airsim_mapper.simserver import protocol
-from tools.bench.probe import TopicRecord, summary
+from tools.bench.probe import TopicRecord, summary, write_result
 
 WIDTH, HEIGHT, POINTS = 1920, 1080, 100_000
 RAW_TOPIC = "/bench/raw"
@@ -142,8 +141,7 @@ def pynng_recv(port: int, warmup: float, duration: float, out: str) -> int:
         "receiver_cpu_cores": cpu_s / seconds,
         "topics": {RAW_TOPIC: summary(record, seconds)},
     }
-    with open(out, "w") as handle:
-        json.dump(result, handle)
+    write_result(out, result)
     print("done", flush=True)
     return 0
 

@@ -102,6 +102,7 @@ class Bench:
 
     def _probe(self, label: str, topics: Sequence[str], duration_s: float) -> tuple[Child, Path]:
         out = self.workdir / f"probe_{label}.json"
+        out.unlink(missing_ok=True)  # a result of an earlier run under the same label is not this one's
         args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(duration_s)]
         args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), *topics]
         return self.module(f"probe_{label}", "tools.bench.probe", *args), out
@@ -109,8 +110,7 @@ class Bench:
     @staticmethod
     def _result(out: Path) -> dict[str, Any]:
         """The JSON a measuring process writes once it has printed `done`."""
-        wait_until(out.exists, 10, f"{out.name}")
-        time.sleep(0.1)
+        wait_until(out.exists, 10, f"{out.name}")  # written whole (probe.write_result)
         return json.loads(out.read_text())
 
     def _collect(self, measurer: Child, out: Path, watched: dict[str, Child]) -> dict[str, Any]:
@@ -172,6 +172,7 @@ class Bench:
         """The poses through the bridge's receive loop alone, no ROS (receive_floor.py), on a replay
         server."""
         out = self.workdir / f"receive_floor_{Path(scene_file).stem}.json"
+        out.unlink(missing_ok=True)  # each round of a scene writes here: wait for this round's
         args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(self.duration_s)]
         args += ["--camera"] if camera else []
         module = "tools.bench.receive_floor"
@@ -223,6 +224,7 @@ class Bench:
             str(port),
         )
         out = self.workdir / f"pynng_{kind}.json"
+        out.unlink(missing_ok=True)
         receiver: Child | None = None
         try:
             wait_until(lambda: port_open(port), 30, "the pynng sender")

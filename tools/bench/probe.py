@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import struct
 import threading
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -32,6 +34,15 @@ class TopicRecord:
     latencies_ms: list[float] = field(default_factory=list)
     bytes: int = 0
     seen: int = 0
+
+
+def write_result(path: str | Path, result: dict[str, Any]) -> None:
+    """Write a measuring process's JSON result whole: to a temporary file renamed over `path`, so that a
+    reader never sees it half written."""
+    path = Path(path)
+    partial = path.with_name(path.name + ".part")
+    partial.write_text(json.dumps(result))
+    os.replace(partial, path)
 
 
 def summary(record: TopicRecord, seconds: float) -> dict[str, Any]:
@@ -103,8 +114,7 @@ def main(argv: list[str] | None = None) -> int:
         seconds = time.monotonic() - start
     print("done", flush=True)
     result = {topic: summary(record, seconds) for topic, record in records.items()}
-    with open(args.out, "w") as handle:
-        json.dump({"seconds": seconds, "topics": result}, handle)
+    write_result(args.out, {"seconds": seconds, "topics": result})
     for subscriber in subscribers:
         subscriber.unregister()
     rospy.signal_shutdown("probe done")

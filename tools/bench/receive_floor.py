@@ -15,16 +15,14 @@ bridge names them, so the report treats both alike) with its own CPU as `receive
 
 from __future__ import annotations
 
-import json
 import os
 import threading
 import time
-from pathlib import Path
 from typing import Any
 
 from tools.bench import scenes
 from tools.bench.forwarder import load_scene, scene_arguments
-from tools.bench.probe import TopicRecord, summary
+from tools.bench.probe import TopicRecord, summary, write_result
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -71,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         "topics": {topic: summary(record, seconds) for topic, record in records.items()},
         "receiver_cpu_cores": cpu / seconds,
     }
-    Path(args.out).write_text(json.dumps(result))
+    write_result(args.out, result)
     os._exit(0)  # the client's threads are not for the measurement to wait on
 
 

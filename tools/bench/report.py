@@ -271,7 +271,7 @@ def rounds_table(e2e: dict[str, Any]) -> str:
     if not rows:
         return ""
     header = [
-        "interleaved rounds (targets: their median)",
+        "interleaved rounds (latency targets, ten drones' CPU: their median)",
         "pose p99 ms: bridge / forwarder / receive loop",
         "p99 ratio",
         "CPU cores: bridge / forwarder",
@@ -363,11 +363,13 @@ def _median(values: list[float | None]) -> float | None:
 
 
 def _rounds_note(figures: list[str], then: str = "round 1: ") -> str:
-    """The figures of each round, before the note that follows (`then` names what it shows), when there
-    was more than one round."""
+    """The figures of each round ("-" where a round gave none), before the note that follows (`then` names
+    what it shows), when there was more than one round."""
     if len(figures) < 2:
         return ""
-    return f"median of {len(figures)} interleaved rounds ({', '.join(figures)}); {then}"
+    known = sum(figure != "-" for figure in figures)
+    rounds = "round" if known == 1 else "rounds"
+    return f"median of {known} interleaved {rounds} ({', '.join(figures)}); {then}"
 
 
 def _round_medians(rounds: list[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any] | None]:
@@ -388,7 +390,8 @@ def floor_over_target(e2e: dict[str, Any]) -> str | None:
     if p99 <= SCALE_POSE_P99_MS:
         return None
     return (
-        f"warning: the poses through the receive loop alone, no ROS, had a worst p99 of {_ms(p99)} ms, "
+        f"warning: the poses through the receive loop alone, no ROS, had a worst p99 of {_ms(p99)} ms"
+        f"{f' (the median of {len(floors)} rounds)' if len(floors) > 1 else ''}, "
         f"over the {SCALE_POSE_P99_MS:g} ms target: the host was too slow for that target during this "
         "run, whatever the bridge does"
     )

@@ -195,7 +195,7 @@ def test_the_pose_latency_targets_are_judged_on_the_median_of_the_interleaved_ro
         "their medians: bare forwarder 0.100 cores; the bridge's receive loop alone, no ROS: 0.050 cores"
     )
     # the receive loop was measured in rounds 2 and 3 only: its median is over those
-    assert "4.35 ms" in (report.floor_over_target(e2e) or "")
+    assert "4.35 ms (the median of 2 rounds), over" in (report.floor_over_target(e2e) or "")
     table = report.rounds_table(e2e)
     assert "1080p camera @30 + pose, round 3" in table and "12.00 / 10.00 / -" in table
     assert "10 drones, round 2" in table and "5.00 / 6.00 / 4.50" in table and "0.300 / 0.100" in table
@@ -206,3 +206,14 @@ def test_with_one_round_there_is_no_rounds_table_and_the_round_is_the_figure():
     assert report.rounds_table(e2e) == ""
     rows = {t["target"]: t for t in report.floor_targets(e2e)}
     assert not rows["2 drones: worst pose p99"]["note"].startswith("median")
+
+
+def test_a_round_without_a_ratio_is_shown_and_left_out_of_the_median():
+    e2e = _e2e()
+    flat = _result("forwarder", 0.2, {POSE: (100.0, 0.0), IMAGE: (30.0, 15.0)})  # no p99 to divide by
+    bridge = _result("bridge", 0.3, {POSE: (100.0, 9.0), IMAGE: (30.0, 20.0)})
+    e2e["rounds"] = {"camera": [{"bridge": bridge, "forwarder": flat}, {"bridge": bridge, "forwarder": flat}]}
+    (row,) = [
+        t for t in report.floor_targets(e2e) if t["target"].startswith("pose p99 under a 1080p camera @30")
+    ]
+    assert row["value"] == 0.6 and row["note"].startswith("median of 1 interleaved round (0.60x, -, -)")
