@@ -125,9 +125,12 @@ def resolve(
     origins: Origins,
     chain: tuple[Path, ...] = (),
     limits: YamlLimits | None = None,
+    sink: list[Problem] | None = None,
 ) -> tuple[dict[str, Any], Origins]:
     """The document `data` with its `extends` chain merged in (unchanged without `extends`), and where each
-    of its values was written; MappingError for cycles, missing bases and unknown rule names."""
+    of its values was written; MappingError for cycles, missing bases and unknown rule names. Given a
+    `sink` list, the mistakes of `data`'s own rules (a name twice, an unknown rule, a bad `after`) go
+    there instead, their rules left out of the merge, so that the caller reports them with the rest."""
     if "extends" not in data:
         rules = data.get("rules") if isinstance(data.get("rules"), list) else []
         for index, rule in enumerate(rules):
@@ -147,11 +150,15 @@ def resolve(
     problems = _frame_problems(base, base_origins, extending=False)
     if problems:
         raise MappingError(problems)
-    return _overlay(base, base_origins, data, origins)
+    return _overlay(base, base_origins, data, origins, sink)
 
 
 def _overlay(
-    base: dict[str, Any], base_origins: Origins, child: dict[str, Any], origins: Origins
+    base: dict[str, Any],
+    base_origins: Origins,
+    child: dict[str, Any],
+    origins: Origins,
+    sink: list[Problem] | None = None,
 ) -> tuple[dict[str, Any], Origins]:
     """`child` merged onto its resolved `base` (see the module's docstring), with the merged marks."""
     table = Table(origins.file)
@@ -173,8 +180,10 @@ def _overlay(
                 below = {str(number): name for number, name in DOCUMENTED_IMAGE_TYPES.items()}
             merged[key] = _merge(below, child.get(key, {}))
     merged["rules"], problems = _rules(base, base_origins, child, origins, table)
-    if problems:
+    if problems and sink is None:
         raise MappingError(sorted(problems))
+    if sink is not None:
+        sink.extend(problems)
     chain = (origins.file, *(base_origins.chain or (base_origins.file,)))
     return {key: value for key, value in merged.items() if value is not None}, table.origins(chain)
 

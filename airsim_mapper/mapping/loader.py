@@ -14,7 +14,7 @@ from typing import Any
 from airsim_mapper.files import ConfigFileError, read_config_text
 from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
 from airsim_mapper.mapping.checks import check_rules
-from airsim_mapper.mapping.errors import MappingError
+from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.extends import is_bare_name, resolve, shipped_hint
 from airsim_mapper.mapping.match import selections_of
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES, Limits, Mapping, Options, PositionBox, Rule, TfSpec
@@ -60,9 +60,10 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     if not isinstance(data, dict):
         kind = "a list" if isinstance(data, list) else f"the scalar {data!r}"
         raise MappingError.single(file, f"the top level must be a mapping of keys (found {kind})", 1, 1)
-    data, marks = resolve(data, Origins.of(marks, file), limits=limits)  # extends: one merged document
+    merged: list[Problem] = []  # the mistakes of an extending file's own rules, told with the rest
+    data, marks = resolve(data, Origins.of(marks, file), limits=limits, sink=merged)
     schema_found = schema_problems(data, marks, file)
-    problems = [problem for _, problem in schema_found]
+    problems = [*merged, *(problem for _, problem in schema_found)]
     bad_rules = {path[1] for path, _ in schema_found if len(path) > 1 and path[0] == "rules"}
     if any(len(path) < 2 or path[0] != "rules" for path, _ in schema_found):
         raise MappingError(sorted(problems))  # the document's frame is broken: rules cannot be built
