@@ -165,7 +165,7 @@ def test_the_node_resolves_relative_rule_names_in_its_own_namespace(tmp_path) ->
     settings = {"mapping": str(mine), "scene": "scene_basic_drone.jsonc", "simconfigpath": str(SIM_CONFIG)}
     prepared, problem = config_problem(settings, "bridge", "/fleet", None, "/fleet/")
     assert prepared is None
-    same = "(that is, '/fleet/airsim_node/Drone1/actual_pose') is also produced by actual_pose[Drone1]"
+    same = "(that is, '/fleet/airsim_node/Drone1/actual_pose') is also used by actual_pose[Drone1]"
     assert same in problem
     prepared, problem = config_problem(settings, "bridge", "/sim2", None, "/fleet/")  # --namespace /sim2
     assert problem is None and prepared is not None

@@ -209,7 +209,7 @@ class _Checker:
                 where = place_text(file, line, self.file)
                 self.add(
                     ("rules", index, "ros"),
-                    f"rule '{rule.name}': ROS name '{rule.ros}' is also produced by rule '{other}' ({where})",
+                    f"rule '{rule.name}': ROS name '{rule.ros}' is also used by rule '{other}' ({where})",
                 )
             else:
                 outputs[rule.ros] = (rule.name, rule.file, rule.line)

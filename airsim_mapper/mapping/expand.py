@@ -193,26 +193,25 @@ def expand(
                     camera["frame_id"] = template.render(rule.frame_id, {**variables, **names})
             bridge = _bridge(rule, key, variables, source)
             if bridge.ros is not None:
+                at = rule.ros_place or (rule.file or mapping.source, rule.line, 1)  # its `ros`, or the rule
                 why = ros_name_problem(bridge.ros)
                 full = resolve_name(bridge.ros, ros_node, node_namespace) if not why else bridge.ros
                 taken = taken_problem(full, bridge.converter, owned)
                 if why:
                     message = f"bridge {bridge.name}: ROS name '{bridge.ros}' is not valid: {why}"
-                    problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
+                    problems.append(Problem(*at, message))
                 elif taken:
-                    problems.append(
-                        Problem(rule.file or mapping.source, rule.line, 1, f"bridge {bridge.name}: {taken}")
-                    )
+                    problems.append(Problem(*at, f"bridge {bridge.name}: {taken}"))
                 elif full in owners:
                     other = owners[full]
                     file, line = places[other.rule]
                     where = place_text(file, line, rule.file or mapping.source)
                     written = f"'{bridge.ros}'" + (f" (that is, '{full}')" if full != bridge.ros else "")
                     message = (
-                        f"bridge {bridge.name}: ROS name {written} is also produced by "
+                        f"bridge {bridge.name}: ROS name {written} is also used by "
                         f"{other.name} (rule at {where})"
                     )
-                    problems.append(Problem(rule.file or mapping.source, rule.line, 1, message))
+                    problems.append(Problem(*at, message))
                 else:
                     owners[full] = bridge
             bridges.append(bridge)

@@ -6,7 +6,7 @@ Every problem is collected and reported at once in one MappingError, each as `FI
 
 from __future__ import annotations
 
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -73,12 +73,15 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     defaults = _options(defaults_raw, Options())
     convention = defaults_raw.get("convention", "ned")
     rules = [
-        _rule(
-            raw,
-            defaults,
-            convention,
-            marks.value(("rules", index))[0],
-            file_of(marks, ("rules", index), file),
+        replace(
+            _rule(
+                raw,
+                defaults,
+                convention,
+                marks.value(("rules", index))[0],
+                file_of(marks, ("rules", index), file),
+            ),
+            ros_place=_place(marks, ("rules", index, "ros"), file) if "ros" in raw else None,
         )
         for index, raw in enumerate(data["rules"])
         if index not in bad_rules
@@ -109,6 +112,11 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
         source=file,
         files=getattr(marks, "chain", ()) or (file,),
     )
+
+
+def _place(marks: Any, path: tuple[Any, ...], file: str) -> tuple[str, int, int]:
+    """The file, line and column of the value at `path`."""
+    return (file_of(marks, path, file), *marks.value(path))
 
 
 def _options(raw: dict[str, Any], base: Options) -> Options:

@@ -107,6 +107,7 @@ class Rule:
     # empty: every element (see mapping.match)
     match: tuple[MappingABC[str, tuple[str, ...]], ...] = ()
     file: str = ""  # the file the rule (or its override) is written in, when not the mapping's own
+    ros_place: tuple[str, int, int] | None = None  # file, line and column of its `ros` value, when known
 
 
 @dataclass(frozen=True)

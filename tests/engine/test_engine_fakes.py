@@ -221,7 +221,7 @@ def test_a_reload_taking_a_name_the_node_owns_is_refused_whole(rig, tmp_path):
     outcome = MappingReloader(rig.engine, str(mine), load_mapping("default")).reload()
     assert not outcome.applied and rig.engine.bridges == before
     assert outcome.errors == (
-        f"{mine}:4:1: bridge extra_pose[Drone1]: ROS name '/node/reload_mapping' belongs to the node's "
+        f"{mine}:9:10: bridge extra_pose[Drone1]: ROS name '/node/reload_mapping' belongs to the node's "
         "private service ~reload_mapping; a rule cannot take it",
     )
 

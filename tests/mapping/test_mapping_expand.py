@@ -157,7 +157,7 @@ def test_two_rules_that_collide_only_after_expansion_are_an_error(scene):
         expand(load_mapping_text(text, "m.yaml"), scene, "n")
     assert (
         str(caught.value)
-        == "m.yaml:4:1: bridge b[n]: ROS name '/x/R2' is also produced by a[R2] (rule at line 3)"
+        == "m.yaml:4:134: bridge b[n]: ROS name '/x/R2' is also used by a[R2] (rule at line 3)"
     )
 
 
@@ -166,7 +166,7 @@ def test_a_scene_name_that_makes_an_illegal_ros_name_is_an_error(write_scene):
     mapping = load_mapping_text(HEADER + rule("r", "robot", "/airsim_node/<robot_name>/pose"), "m.yaml")
     with pytest.raises(
         MappingError,
-        match=r"m\.yaml:3:1: bridge r\[Drone-1\]: ROS name '/airsim_node/Drone-1/pose' is not valid",
+        match=r"m\.yaml:3:135: bridge r\[Drone-1\]: ROS name '/airsim_node/Drone-1/pose' is not valid",
     ):
         expand(mapping, scene, "n")
 

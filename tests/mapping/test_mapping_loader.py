@@ -294,7 +294,7 @@ def _problems(*rules: tuple[str, str]) -> list[str]:
 def test_a_rule_the_schema_refuses_still_counts_in_the_duplicate_checks_when_it_would_publish():
     problems = _problems(("pose", "    queue_size: 0\n"), ("pose", ""))
     assert any("duplicate rule name 'pose'" in p for p in problems)
-    assert any("ROS name '/x/<robot_name>/pose' is also produced by rule 'pose'" in p for p in problems)
+    assert any("ROS name '/x/<robot_name>/pose' is also used by rule 'pose'" in p for p in problems)
 
 
 @pytest.mark.parametrize(

@@ -47,7 +47,7 @@ def test_a_rule_on_the_nodes_private_services_is_refused_at_expansion(scene, ser
     with pytest.raises(MappingError) as raised:
         expand(mapping, scene, "bridge", namespace)
     (problem,) = raised.value.problems
-    assert (problem.file, problem.line) == ("mine.yaml", 3)
+    assert (problem.file, problem.line, problem.column) == ("mine.yaml", 8, 10)  # at its ros value
     assert (
         f"'{namespace}/bridge/{service}' belongs to the node's private service ~{service}" in problem.message
     )
@@ -90,7 +90,7 @@ def test_two_rules_with_one_name_and_different_types_are_a_located_error(tmp_pat
     assert line.startswith(
         f"{mapping}:9:10: rule 'mine': ROS name '<namespace>/airsim_node/<robot_name>/actual_pose'"
     )
-    assert line.endswith(f"is also produced by rule 'actual_pose' ({DEFAULT_MAPPING}:40)")
+    assert line.endswith(f"is also used by rule 'actual_pose' ({DEFAULT_MAPPING}:40)")
 
 
 def test_the_shipped_mappings_take_no_name_the_node_owns(scene):
@@ -108,10 +108,10 @@ def test_a_relative_name_collides_with_the_absolute_one_it_resolves_to(scene, no
     with pytest.raises(MappingError) as raised:
         expand(mapping, scene, "bridge", node_namespace, node_namespace)
     (problem,) = raised.value.problems
-    assert (problem.file, problem.line) == ("mine.yaml", 4)  # the rule's own line
+    assert (problem.file, problem.line, problem.column) == ("mine.yaml", 9, 10)  # at its ros value
     assert problem.message.startswith(
         f"bridge mine[Drone1]: ROS name 'airsim_node/Drone1/actual_pose' (that is, "
-        f"'{node_namespace}/airsim_node/Drone1/actual_pose') is also produced by actual_pose[Drone1] "
+        f"'{node_namespace}/airsim_node/Drone1/actual_pose') is also used by actual_pose[Drone1] "
     )
     assert problem.message.endswith("default.yaml:40)")  # the other rule is in the base file
     # in another namespace it is another topic
@@ -137,7 +137,7 @@ def test_private_names_resolve_with_the_ros_nodes_own_name_where_the_mappings_no
     private = pose_rule("mine", "~<robot_name>/pose")
     absolute = pose_rule("other", "/fleet/mission/<robot_name>/pose")
     both = load_mapping_text("version: 1\nrules:\n" + private + absolute, "mine.yaml")
-    with pytest.raises(MappingError, match="'/fleet/mission/Drone1/pose' is also produced by mine"):
+    with pytest.raises(MappingError, match="'/fleet/mission/Drone1/pose' is also used by mine"):
         expand(both, scene, "bridge", "", "/fleet", "mission")
     assert expand(both, scene, "bridge", "", "/fleet")  # as the node "bridge": /fleet/bridge/Drone1/pose
     rospys = load_mapping_text("version: 1\nrules:\n" + pose_rule("mine", "/fleet/mission/get_loggers"))
@@ -146,7 +146,7 @@ def test_private_names_resolve_with_the_ros_nodes_own_name_where_the_mappings_no
     rig = EngineRig(mapping=both, ros_name="/fleet/mission")  # the engine resolves as its ROS node
     try:
         assert rig.engine.node_name == "node"
-        with pytest.raises(MappingError, match="is also produced"):
+        with pytest.raises(MappingError, match="is also used"):
             rig.engine.specs_for(scene)
     finally:
         rig.engine.shutdown(timeout=2.0)
