@@ -39,6 +39,7 @@ from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
 from airsim_mapper.mapping.names import ros_namespace
+from airsim_mapper.mapping.report import format_table
 from airsim_mapper.scene import Scene, read_scene
 
 log = ros_logger("airsim_mapper.engine")
@@ -303,6 +304,7 @@ class Engine:
             self._loading = scene_file
             try:
                 self.load_scene(scene_file)
+                log.info("bridges:\n%s", format_table([bridge.spec for bridge in self.bridges.values()]))
             except ConfigError as exc:
                 report = "\n".join(shorten(line, SHOWN_LINE) for line in str(exc).splitlines())
                 self._refusals.warn(

@@ -3,6 +3,7 @@ seconds (no simulator, no ROS master)."""
 
 from __future__ import annotations
 
+import logging
 import threading
 
 import pytest
@@ -248,3 +249,11 @@ def test_time_going_back_in_the_pose_stream_starts_tf_and_the_stale_filters_over
     assert rig.engine.sim_time.jumps_back == 1 and rig.ros.tf_cleared == 2
     assert imu._fresh_after == 0 and rig.engine.hub.sim_now() <= 1_000_000_000
     assert "tf buffer cleared" in caplog.text
+
+
+def test_a_requested_scene_load_logs_the_table_of_its_bridges(rig: EngineRig, caplog):
+    caplog.set_level(logging.INFO, logger="rosout")
+    rig.engine.request_scene(SCENE)
+    wait_until(lambda: "bridges:\n" in caplog.text, 20, "the bridge table")
+    table = caplog.text.split("bridges:\n", 1)[1]
+    assert "/airsim_node/Drone1/actual_pose" in table and "geometry_msgs/PoseStamped" in table
