@@ -26,6 +26,7 @@ import argparse
 import contextlib
 import logging
 import os
+import signal
 import sys
 import threading
 import time
@@ -307,9 +308,11 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     rospy.on_shutdown(stop.wake)  # `rosnode kill`, or a shutdown requested from another thread
     while not stopping():
         stop.wait(STOP_CHECK_S)
+    reason = signal.Signals(stop.signals[0]).name if stop else "shutdown requested"
+    log.info("stopping (%s)", reason)
     if reloader is not None:
         reloader.stop()
-    rospy.signal_shutdown(f"signal {stop.signals[0]}" if stop else "shutdown requested")
+    rospy.signal_shutdown(reason)
     return 0
 
 

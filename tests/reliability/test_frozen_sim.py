@@ -62,6 +62,7 @@ def test_sigint_stops_the_node_within_its_deadline_while_the_simulator_is_frozen
     assert took < SHUTDOWN_DEADLINE_S + 1.0, took
     assert code == 0
     assert "Traceback" not in node.output()
+    assert "stopping (SIGINT)" in node.output()  # what stopped it is in its log
 
 
 def test_a_second_sigint_ends_the_node_at_once(launcher: Rig, ros_master: RosMaster):
