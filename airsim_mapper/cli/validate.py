@@ -61,12 +61,13 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _print_bridges(bridges: Sequence[BridgeSpec], fmt: str) -> None:
+def _print_bridges(bridges: Sequence[BridgeSpec], fmt: str, scene_path: Path) -> None:
+    """The bridges as a table (with their count and the scene file they were expanded over) or JSON."""
     if fmt == "json":
         print(json.dumps([bridge_row(b) for b in bridges], indent=2))
     else:
         print(format_table(bridges))
-        print(f"\n{len(bridges)} bridges")
+        print(f"\n{len(bridges)} bridges in {scene_path}")
 
 
 def described(spec: str) -> str:
@@ -138,7 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             print(str(err), file=sys.stderr)
         return EXIT_USAGE if err.unreadable else EXIT_INVALID
-    _print_bridges(bridges, args.format)
+    _print_bridges(bridges, args.format, Path(args.simconfigpath) / args.scene)
     summary, warnings = match_report(mapping, scene, args.nodename, args.namespace)
     if summary and args.format == "text":
         print("\n" + "\n".join(summary))

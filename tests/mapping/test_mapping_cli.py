@@ -46,7 +46,9 @@ def test_the_console_script_prints_the_drone1_topic_table_for_the_sensors_scene(
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[0].split() == ["DIRECTION", "SIMULATOR", "ROS", "TYPE", "FRAME"]
-    assert lines[-1] == f"{SENSORS_SCENE_BRIDGES[sim_config]} bridges"
+    # the count, and the scene file it was read from
+    scene = f"{sim_config}/scene_drone_sensors.jsonc"
+    assert lines[-1] == f"{SENSORS_SCENE_BRIDGES[sim_config]} bridges in {scene}"
     pose = next(line for line in lines if " /airsim_node/Drone1/actual_pose " in line)
     assert pose.split() == [
         "sim_to_ros",
