@@ -141,7 +141,7 @@ class ProjectAirSimWrapper:
 
     @property
     def bridges(self) -> list[Any]:
-        return [bridge.spec for bridge in self.engine.bridges.values()]
+        return list(self.engine.bridge_specs())
 
     @property
     def scene(self) -> Scene | None:

@@ -147,11 +147,17 @@ class Engine:
         """The bridges of `scene`, or the node's own (load_scene) without one."""
         return expand(self.mapping, scene, self.node_name, self.namespace, *self._ros_place)
 
+    def bridge_specs(self) -> tuple[BridgeSpec, ...]:
+        """The specs of the bridges running now (read under the lock: a reload or a scene load may be
+        changing them)."""
+        with self.lock:
+            return tuple(bridge.spec for bridge in self.bridges.values())
+
     def start_node_bridges(self) -> tuple[BridgeSpec, ...]:
         """Before any scene: run the node's own bridges, so a scene can be loaded over ROS."""
         with self.lock:
             if self.scene is not None:
-                return tuple(b.spec for b in self.bridges.values())
+                return self.bridge_specs()
             return self.apply(None)
 
     def apply(
@@ -304,7 +310,6 @@ class Engine:
             self._loading = scene_file
             try:
                 self.load_scene(scene_file)
-                log.info("bridges:\n%s", format_table([bridge.spec for bridge in self.bridges.values()]))
             except ConfigError as exc:
                 report = "\n".join(shorten(line, SHOWN_LINE) for line in str(exc).splitlines())
                 self._refusals.warn(
@@ -314,6 +319,8 @@ class Engine:
                 self._refusals.warn(
                     f"load_scene {shorten(scene_file)!r} failed: {shorten(str(exc), SHOWN_LINE)}"
                 )
+            else:
+                log.info("bridges:\n%s", format_table(self.bridge_specs()))
             finally:
                 self._loading = None
 

@@ -6,7 +6,7 @@ Every problem is collected and reported at once in one MappingError, each as `FI
 
 from __future__ import annotations
 
-from dataclasses import fields, replace
+from dataclasses import fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -73,15 +73,13 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
     defaults = _options(defaults_raw, Options())
     convention = defaults_raw.get("convention", "ned")
     rules = [
-        replace(
-            _rule(
-                raw,
-                defaults,
-                convention,
-                marks.value(("rules", index))[0],
-                file_of(marks, ("rules", index), file),
-            ),
-            ros_place=_place(marks, ("rules", index, "ros"), file) if "ros" in raw else None,
+        _rule(
+            raw,
+            defaults,
+            convention,
+            marks.value(("rules", index))[0],
+            file_of(marks, ("rules", index), file),
+            _place(marks, ("rules", index, "ros"), file) if "ros" in raw else None,
         )
         for index, raw in enumerate(data["rules"])
         if index not in bad_rules
@@ -150,7 +148,14 @@ def _partial_rule(
         return None
 
 
-def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, file: str) -> Rule:
+def _rule(
+    raw: dict[str, Any],
+    defaults: Options,
+    convention: str,
+    line: int,
+    file: str,
+    ros_place: tuple[str, int, int] | None = None,
+) -> Rule:
     tf = raw.get("tf")
     return Rule(
         name=raw["name"],
@@ -168,4 +173,5 @@ def _rule(raw: dict[str, Any], defaults: Options, convention: str, line: int, fi
         line=line,
         match=selections_of(raw.get("match")),
         file=file,
+        ros_place=ros_place,
     )

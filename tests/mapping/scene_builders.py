@@ -1,4 +1,5 @@
-"""Builders of small scene and robot configs for mapping tests (plain dicts, written as JSON)."""
+"""Builders of small scene and robot configs for mapping tests (plain dicts, written as JSON), and of
+mapping rules (YAML text)."""
 
 from __future__ import annotations
 
@@ -47,3 +48,11 @@ def scene_doc(robots: dict[str, str], scene_id: str = "TestScene") -> dict[str, 
         for name, config in robots.items()
     ]
     return {"id": scene_id, "actors": actors, "clock": {"type": "steppable"}}
+
+
+def pose_rule(name: str, ros: str, ros_type: str = "geometry_msgs/PoseStamped") -> str:
+    """One pose rule of a mapping's `rules:` list, in block style, ending with its `type` line."""
+    return (
+        f"  - name: {name}\n    for_each: robot\n    direction: sim_to_ros\n    converter: pose\n"
+        f"    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose\n    ros: {ros}\n    type: {ros_type}\n"
+    )

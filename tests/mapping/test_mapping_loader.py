@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from scene_builders import pose_rule
 
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.loader import DEFAULT_IMAGE_TYPES, load_mapping_text
@@ -274,18 +275,10 @@ def test_first_message_is_fresh_by_default_and_a_rule_may_keep_the_cached_one():
         load_mapping_text(text.replace("first_message: cached", "first_message: stale"), "m.yaml")
 
 
-POSE_RULE = """  - name: {name}
-    for_each: robot
-    direction: sim_to_ros
-    converter: pose
-    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose
-    ros: /x/<robot_name>/pose
-    type: geometry_msgs/PoseStamped
-{extra}"""
-
-
 def _problems(*rules: tuple[str, str]) -> list[str]:
-    text = "version: 1\nrules:\n" + "".join(POSE_RULE.format(name=name, extra=extra) for name, extra in rules)
+    """The problems (without their places) of pose rules on one ROS name, each (name, extra lines)."""
+    listed = "".join(pose_rule(name, "/x/<robot_name>/pose") + extra for name, extra in rules)
+    text = "version: 1\nrules:\n" + listed
     with pytest.raises(MappingError) as caught:
         load_mapping_text(text, "m.yaml")
     return [problem.split(": ", 1)[1] for problem in str(caught.value).splitlines()]

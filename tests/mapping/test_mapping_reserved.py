@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 from harness import SIM_CONFIG
+from scene_builders import pose_rule
 
 from airsim_mapper.cli.validate import main
 from airsim_mapper.mapping.errors import MappingError
@@ -15,13 +16,6 @@ from airsim_mapper.resources import DEFAULT_MAPPING
 from airsim_mapper.scene import read_scene
 
 EXTENDING = "version: 1\nextends: default\n"
-
-
-def pose_rule(name: str, ros: str, ros_type: str = "geometry_msgs/PoseStamped") -> str:
-    return (
-        f"  - name: {name}\n    for_each: robot\n    direction: sim_to_ros\n    converter: pose\n"
-        f"    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose\n    ros: {ros}\n    type: {ros_type}\n"
-    )
 
 
 @pytest.fixture(scope="module")

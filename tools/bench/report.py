@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from statistics import median
 from typing import Any
 
@@ -316,7 +317,7 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
     if "camera" in pairs:
         rounds = latency_rounds(e2e, "camera")
         ratios = [_p99_ratio(r["bridge"], r["forwarder"]) for r in rounds]
-        note = _rounds_note([_x(r) for r in ratios])
+        note = _rounds_note(ratios, _x)
         note += _p99_note(*pairs["camera"], rounds[0].get("receive_floor"))
         if "camera_apart" in pairs:  # a figure beside the target, which stays judged on the one probe
             apart = pairs["camera_apart"]
@@ -333,12 +334,12 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
         rounds = latency_rounds(e2e, "scale")
         drones = len(_of_kind(rounds[0]["bridge"], "pose"))
         cores = [r["bridge"]["bridge_cpu_cores"] for r in rounds]
-        note = _rounds_note([f"{c:.3f}" for c in cores], "their medians: ") + _cpu_note(
+        note = _rounds_note(cores, lambda c: f"{c:.3f}", "their medians: ") + _cpu_note(
             *_round_medians(rounds)
         )
         out.append(_limit(f"{drones} drones: bridge CPU", _median(cores), 0.25, "cores", note))
         p99s = [_worst_pose(r["bridge"])[1] for r in rounds]
-        note = _rounds_note([f"{_ms(p)} ms" for p in p99s])
+        note = _rounds_note(p99s, lambda p: f"{_ms(p)} ms")
         note += _p99_note(*pairs["scale"], rounds[0].get("receive_floor"))
         out.append(_limit(f"{drones} drones: worst pose p99", _median(p99s), SCALE_POSE_P99_MS, "ms", note))
     return out
@@ -362,14 +363,14 @@ def _median(values: list[float | None]) -> float | None:
     return median(known) if known else None
 
 
-def _rounds_note(figures: list[str], then: str = "round 1: ") -> str:
-    """The figures of each round ("-" where a round gave none), before the note that follows (`then` names
-    what it shows), when there was more than one round."""
-    if len(figures) < 2:
+def _rounds_note(values: list[float | None], show: Callable[[float], str], then: str = "round 1: ") -> str:
+    """Each round's value as `show` writes it ("-" where a round gave none), before the note that follows
+    (`then` names what it shows), when there was more than one round."""
+    if len(values) < 2:
         return ""
-    known = sum(figure != "-" for figure in figures)
-    rounds = "round" if known == 1 else "rounds"
-    return f"median of {known} interleaved {rounds} ({', '.join(figures)}); {then}"
+    known = sum(value is not None for value in values)
+    figures = ", ".join("-" if value is None else show(value) for value in values)
+    return f"median of {known} interleaved {'round' if known == 1 else 'rounds'} ({figures}); {then}"
 
 
 def _round_medians(rounds: list[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any] | None]:
