@@ -1,8 +1,12 @@
 """Per-message CPU cost, from the simulator's frame bytes to a serialised ROS message (one process).
 
 Each case is one frame, packed exactly as the headless server (and the C++ server) packs it, taken through:
-- bridge: the bridge's receive loop decoding (`receive.decode_body`: large bodies straight into numpy
-  arrays and pixel views), the bridge's converter and genpy serialisation;
+- bridge: the node's path. The frame's header parsed where the frame lies (`SimLink.dispatch`), the body
+  decoded in place (`receive.decode_body`: large bodies straight into numpy arrays and pixel views), the
+  bridge's converter, and the message serialised as the node publishes it (`publish.serialized`: a head,
+  then the pixels or points from where they are, for one `sendmsg`);
+- bridge, one buffer: the same message decoded through msgpack's outer unpacking (a copy of the body) and
+  serialised into one buffer, as for a message that waits in a connection's queue;
 - client: the client's msgpack unpacking of the full frame, the bridge's converter, serialisation;
 - reference: the client's unpacking, the old bridge's algorithm (reference.py), serialisation;
 - bare: genpy serialisation of an already built message holding the same data (what rospy alone costs).
@@ -26,6 +30,8 @@ from airsim_mapper.convert import registry
 from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.engine.fast_frames import parse_frame_header
+from airsim_mapper.engine.publish import serialized
 from airsim_mapper.engine.receive import decode_body
 from airsim_mapper.simserver import protocol
 from tools.bench import reference
@@ -186,16 +192,41 @@ def side_by_side_cpu_ms(fns: tuple[Callable[[], Any], ...], repeat: int) -> list
 
 
 def bridge_unpack(frame: bytes) -> Any:
-    """A frame's message as the bridge's receive loop decodes it (receive.receive -> decode_body)."""
+    """A frame's message as the bridge's receive loop decodes it: the header parsed in place, as
+    `SimLink.dispatch` does for a large frame, then `decode_body` on a view of the body."""
+    header = parse_frame_header(frame)
+    if header is None:
+        raise AssertionError("a cost case's frame must be large enough for the bridge's header parser")
+    return decode_body(memoryview(frame)[header.body_start : header.body_end], fast=True)[0]
+
+
+def one_buffer_unpack(frame: bytes) -> Any:
+    """A frame's message decoded after msgpack's outer unpacking, which copies the body."""
     return decode_body(msgpack.unpackb(frame, raw=True)[2], fast=True)[0]
+
+
+def node_serialize(msg: Any) -> tuple[Any, ...]:
+    """The message as the node hands it to a connection: in parts where it serialises apart (a Buffer*
+    message), otherwise rospy's one buffer."""
+    serialize_apart = getattr(msg, "serialize_apart", None)
+    return serialized(msg, serialize_apart, 0) if serialize_apart else (serialize(msg),)
+
+
+def sent_bytes(parts: tuple[Any, ...]) -> bytes:
+    """What `node_serialize`'s parts put on the wire, without the length prefix of a message sent apart."""
+    joined = b"".join(parts)
+    return joined[4:] if len(parts) > 1 else joined
 
 
 def measure_case(case: Case) -> dict[str, Any]:
     convert = registry.get(case.converter)
     ctx = ConvertContext(frame_id="bench")
 
-    def bridge() -> bytes:
-        return serialize(convert(bridge_unpack(case.frame), ctx))
+    def bridge() -> tuple[Any, ...]:
+        return node_serialize(convert(bridge_unpack(case.frame), ctx))
+
+    def one_buffer() -> bytes:
+        return serialize(convert(one_buffer_unpack(case.frame), ctx))
 
     def client() -> bytes:
         return serialize(convert(client_unpack(case.frame), ctx))
@@ -208,15 +239,16 @@ def measure_case(case: Case) -> dict[str, Any]:
         "unpack_fast_ms": cpu_ms(lambda: bridge_unpack(case.frame), case.repeat),
     }
     try:
-        same = bridge() == client()
+        expected = client()
+        same = sent_bytes(bridge()) == expected and one_buffer() == expected
     except ConversionError as exc:  # a converter that cannot take numpy input yet: say so in the results
         result["bridge_error"] = str(exc)
         result["bare_serialize_ms"] = cpu_ms(lambda: serialize(plain), case.repeat)
         return result
     if not same:
         raise AssertionError(f"{case.name}: the fast path serialises differently from the client path")
-    result["bridge_ms"], result["bare_serialize_ms"] = side_by_side_cpu_ms(
-        (bridge, lambda: serialize(plain)), case.repeat
+    result["bridge_ms"], result["one_buffer_ms"], result["bare_serialize_ms"] = side_by_side_cpu_ms(
+        (bridge, one_buffer, lambda: serialize(plain)), case.repeat
     )
     result["ratio_to_bare_serialize"] = result["bridge_ms"] / max(result["bare_serialize_ms"], 1e-6)
     if case.reference is not None:

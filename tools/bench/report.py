@@ -34,6 +34,7 @@ def costs_table(costs: dict[str, dict[str, Any]]) -> str:
     header = [
         "per message, frame bytes -> serialised ROS msg (CPU ms)",
         "bridge",
+        "one buffer",
         "client path",
         "reference",
         "x faster",
@@ -50,6 +51,7 @@ def costs_table(costs: dict[str, dict[str, Any]]) -> str:
             [
                 name,
                 _ms(c.get("bridge_ms")) if "bridge_error" not in c else "error",
+                _ms(c.get("one_buffer_ms")),
                 _ms(c.get("client_path_ms")),
                 ref_text,
                 f"{c['speedup_vs_reference']:.0f}x" if "speedup_vs_reference" in c else "-",

@@ -47,6 +47,17 @@ def test_a_cost_case_times_every_path_and_checks_the_fast_path_serialises_identi
     assert result["frame_bytes"] == len(case.frame)
 
 
+def test_the_bridge_cost_takes_the_node_s_path_and_sends_the_pixels_from_the_frame():
+    frame = costs.image_frame(128, 128, "BGR")  # over the size at which the node parses frames in place
+    convert = registry.get("image")
+    parts = costs.node_serialize(convert(costs.bridge_unpack(frame), ConvertContext(frame_id="c")))
+    pixels = np.frombuffer(parts[1], dtype=np.uint8)
+    assert pixels.size == 128 * 128 * 3
+    assert np.shares_memory(pixels, np.frombuffer(frame, dtype=np.uint8))
+    client = costs.serialize(convert(costs.client_unpack(frame), ConvertContext(frame_id="c")))
+    assert costs.sent_bytes(parts) == client
+
+
 def test_converter_costs_are_judged_against_the_issue_limits():
     measured = {
         report.LIDAR: {"bridge_ms": 6.0, "speedup_vs_reference": 12.0},
