@@ -23,10 +23,16 @@ SCALE_DRONES = (1, 2, 5, 10)
 LATENCY_ROUNDS = 3  # the pose p99 targets are judged on the median of this many interleaved rounds
 
 
-def more_rounds(bench: Bench, key: str, scene: str, topics: list[str]) -> list[dict[str, Any]]:
-    """LATENCY_ROUNDS - 1 more rounds of one case, each through the bridge, the bare forwarder and the
-    receive loop alone, in an order rotated by one each round so that a slow spell of the host falls on
-    each of them in turn. The first round is the case's main runs."""
+def more_rounds(
+    bench: Bench,
+    key: str,
+    scene: str,
+    topics: list[str],
+    kinds: tuple[str, ...] = ("bridge", "forwarder", "receive_floor"),
+) -> list[dict[str, Any]]:
+    """LATENCY_ROUNDS - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
+    the receive loop alone), in an order rotated by one each round so that a slow spell of the host falls
+    on each of them in turn. The first round is the case's main runs."""
 
     def bridge(n: int) -> dict[str, Any]:
         with bench.bridge_session(scene) as session:
@@ -39,12 +45,12 @@ def more_rounds(bench: Bench, key: str, scene: str, topics: list[str]) -> list[d
     def receive_floor(n: int) -> dict[str, Any]:
         return bench.receive_floor(scene, camera=True)
 
-    kinds = {"bridge": bridge, "forwarder": forwarder, "receive_floor": receive_floor}
+    runs = {"bridge": bridge, "forwarder": forwarder, "receive_floor": receive_floor}
     names = list(kinds)
     rounds = []
     for n in range(1, LATENCY_ROUNDS):
         order = names[n % len(names) :] + names[: n % len(names)]
-        rounds.append({name: kinds[name](n + 1) for name in order})
+        rounds.append({name: runs[name](n + 1) for name in order})
     return rounds
 
 
@@ -111,6 +117,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         floor["camera_load"] = session.probe("forwarder_pose_load", loaded)
     with bench.bridge_session(load, runner="mission", profile=profile("mission")) as session:
         out["pose"]["camera_load_mission"] = session.probe("pose_load_mission", loaded)
+    out["rounds"]["camera_load"] = more_rounds(bench, "camera_load", load, loaded, ("bridge", "forwarder"))
 
     for drones in SCALE_DRONES:
         scene = bench.scene(f"scale{drones}", drones, scenes.CameraSetup(320, 240, 1 / SCALE_CAMERA_HZ, (0,)))

@@ -251,7 +251,11 @@ def floor_table(e2e: dict[str, Any]) -> str:
     )
 
 
-ROUND_ROWS = (("camera", "1080p camera @30 + pose"), ("scale", "10 drones"))
+ROUND_ROWS = (
+    ("camera", "1080p camera @30 + pose"),
+    ("camera_load", "1080p camera @60 + pose"),
+    ("scale", "10 drones"),
+)
 
 
 def rounds_table(e2e: dict[str, Any]) -> str:
@@ -327,11 +331,15 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
         ratio = _median(ratios)
         out.append(_limit("pose p99 under a 1080p camera @30 / the forwarder's", ratio, 0.8, "x", note))
     if "camera_load" in pairs:
-        ours, floor = pairs["camera_load"]
-        rate = _worst_pose(ours)[0]
-        out.append(_target("pose rate under a 1080p camera @60", rate, 98.0, rate >= 98.0, "Hz"))
-        ratio = _p99_ratio(ours, floor)
-        out.append(_limit("pose p99 under a 1080p camera @60 / the forwarder's", ratio, 1.0, "x"))
+        rounds = latency_rounds(e2e, "camera_load")
+        rates = [_worst_pose(r["bridge"])[0] for r in rounds]
+        rate = median(rates)
+        note = _rounds_note(rates, lambda r: f"{r:.1f} Hz").removesuffix("; round 1: ")
+        out.append(_target("pose rate under a 1080p camera @60", rate, 98.0, rate >= 98.0, "Hz", note))
+        ratios = [_p99_ratio(r["bridge"], r["forwarder"]) for r in rounds]
+        note = _rounds_note(ratios, _x) + _p99_note(*pairs["camera_load"])
+        ratio = _median(ratios)
+        out.append(_limit("pose p99 under a 1080p camera @60 / the forwarder's", ratio, 1.0, "x", note))
     if "scale" in pairs:
         rounds = latency_rounds(e2e, "scale")
         drones = len(_of_kind(rounds[0]["bridge"], "pose"))
@@ -527,20 +535,27 @@ def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
             )
         )
     pose_idle = topic(e2e["pose"]["idle"])
-    loads = [("30 Hz (nominal)", bridge["camera"]), ("60 Hz (saturating)", e2e["pose"]["camera_load"])]
+    loads = [
+        ("30 Hz (nominal)", latency_rounds(e2e, "camera"), bridge["camera"]),
+        ("60 Hz (saturating)", latency_rounds(e2e, "camera_load"), e2e["pose"]["camera_load"]),
+    ]
     if "camera_load_mission" in e2e["pose"]:
-        loads.append(("60 Hz (saturating), mission script", e2e["pose"]["camera_load_mission"]))
-    for label, result in loads:
-        pose = topic(result, next(k for k in result["topics"] if k.endswith("actual_pose")))
+        loads.append(("60 Hz (saturating), mission script", [], e2e["pose"]["camera_load_mission"]))
+    for label, rounds, result in loads:  # the node's, on the median of its rounds where it ran in rounds
+        runs = [r["bridge"] for r in rounds] or [result]
+        p99s = [_worst_pose(run)[1] for run in runs]
+        p99 = median(p99s)
         out.append(
             _target(
                 f"pose p99 under 1080p camera load at {label}",
-                pose["latency_p99_ms"],
+                p99,
                 10.0,
-                pose["latency_p99_ms"] <= 10.0,
+                p99 <= 10.0,
                 "ms",
-                f"idle p99 {pose_idle['latency_p99_ms']:.1f} ms; "
-                f"rate {pose['rate_hz']:.0f} Hz loaded vs {pose_idle['rate_hz']:.0f} Hz idle",
+                _rounds_note(p99s, lambda p: f"{_ms(p)} ms", "")
+                + f"idle p99 {pose_idle['latency_p99_ms']:.1f} ms; "
+                f"rate {median(_worst_pose(run)[0] for run in runs):.0f} Hz loaded vs "
+                f"{pose_idle['rate_hz']:.0f} Hz idle",
             )
         )
     out += floor_targets(e2e)

@@ -217,3 +217,38 @@ def test_a_round_without_a_ratio_is_shown_and_left_out_of_the_median():
         t for t in report.floor_targets(e2e) if t["target"].startswith("pose p99 under a 1080p camera @30")
     ]
     assert row["value"] == 0.6 and row["note"].startswith("median of 1 interleaved round (0.60x, -, -)")
+
+
+def test_the_60_hz_camera_case_is_judged_on_the_median_of_its_rounds_the_mission_script_on_its_one_run():
+    def raw(role: str, cores: float) -> dict:
+        topics = {"/bench/raw": {"rate_hz": 30.0, "latency_p50_ms": 10.0, "latency_p99_ms": 12.0}}
+        return {f"{role}_cpu_cores": cores, "topics": topics}
+
+    def loaded(role: str, rate: float, p99: float) -> dict:
+        return _result(role, 0.5, {POSE: (rate, p99), IMAGE: (60.0, 20.0)})
+
+    e2e = _e2e()  # round 1: pose 99 Hz, p99 9 ms through the bridge, 10 ms through the forwarder
+    e2e["baselines"] = {"rospy_image": raw("publisher", 0.09), "pynng_image": raw("receiver", 0.135)}
+    e2e["scale"] = {}
+    e2e["pose"]["camera_load_mission"] = loaded("bridge", 100.0, 10.5)
+    e2e["rounds"] = {
+        "camera_load": [
+            {"forwarder": loaded("forwarder", 90.0, 10.0), "bridge": loaded("bridge", 97.0, 12.0)},
+            {"bridge": loaded("bridge", 100.0, 11.0), "forwarder": loaded("forwarder", 95.0, 20.0)},
+        ]
+    }
+    costs = {report.LIDAR: {"bridge_ms": 1.0, "speedup_vs_reference": 20.0}, report.DEPTH: {"bridge_ms": 1.0}}
+    costs[report.BGR] = {"ratio_to_bare_serialize": 1.0, "bare_serialize_ms": 2.0}
+    rows = {t["target"]: t for t in report.targets({"costs": costs, "e2e": e2e})}
+    rate = rows["pose rate under a 1080p camera @60"]
+    assert (rate["value"], rate["met"]) == (99.0, True)  # 99, 97, 100
+    assert rate["note"] == "median of 3 interleaved rounds (99.0 Hz, 97.0 Hz, 100.0 Hz)"
+    ratio = rows["pose p99 under a 1080p camera @60 / the forwarder's"]
+    assert (ratio["value"], ratio["met"]) == (0.9, True)  # 0.9, 1.2, 0.55
+    assert "(0.90x, 1.20x, 0.55x); round 1: bridge 9.00 ms, bare forwarder 10.00 ms" in ratio["note"]
+    node = rows["pose p99 under 1080p camera load at 60 Hz (saturating)"]
+    assert (node["value"], node["met"]) == (11.0, False)  # 9, 12, 11
+    assert node["note"].startswith("median of 3 interleaved rounds (9.00 ms, 12.00 ms, 11.00 ms); idle p99")
+    mission = rows["pose p99 under 1080p camera load at 60 Hz (saturating), mission script"]
+    assert (mission["value"], mission["met"]) == (10.5, False) and mission["note"].startswith("idle p99")
+    assert "1080p camera @60 + pose, round 3" in report.rounds_table(e2e)
