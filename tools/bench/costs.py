@@ -25,6 +25,7 @@ from typing import Any
 
 import msgpack
 import numpy as np
+from rospy.msg import serialize_message
 
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.buffer_data import BufferData
@@ -206,16 +207,19 @@ def one_buffer_unpack(frame: bytes) -> Any:
 
 
 def node_serialize(msg: Any) -> tuple[Any, ...]:
-    """The message as the node hands it to a connection: in parts where it serialises apart (a Buffer*
-    message), otherwise rospy's one buffer."""
+    """The message as the node hands it to a connection, length prefix first: in parts where it serialises
+    apart (a Buffer* message, `publish.serialized`), otherwise rospy's publish buffer."""
     serialize_apart = getattr(msg, "serialize_apart", None)
-    return serialized(msg, serialize_apart, 0) if serialize_apart else (serialize(msg),)
+    if serialize_apart is not None:
+        return serialized(msg, serialize_apart, 0)
+    buffer = io.BytesIO()
+    serialize_message(buffer, 0, msg)
+    return (buffer.getvalue(),)
 
 
 def sent_bytes(parts: tuple[Any, ...]) -> bytes:
-    """What `node_serialize`'s parts put on the wire, without the length prefix of a message sent apart."""
-    joined = b"".join(parts)
-    return joined[4:] if len(parts) > 1 else joined
+    """The message that `node_serialize`'s parts put on the wire, without its length prefix."""
+    return b"".join(parts)[4:]
 
 
 def measure_case(case: Case) -> dict[str, Any]:

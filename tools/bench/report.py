@@ -334,7 +334,7 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
         rounds = latency_rounds(e2e, "camera_load")
         rates = [_worst_pose(r["bridge"])[0] for r in rounds]
         rate = median(rates)
-        note = _rounds_note(rates, lambda r: f"{r:.1f} Hz").removesuffix("; round 1: ")
+        note = _rounds_note(rates, lambda r: f"{r:.1f} Hz", None)
         out.append(_target("pose rate under a 1080p camera @60", rate, 98.0, rate >= 98.0, "Hz", note))
         ratios = [_p99_ratio(r["bridge"], r["forwarder"]) for r in rounds]
         note = _rounds_note(ratios, _x) + _p99_note(*pairs["camera_load"])
@@ -373,14 +373,17 @@ def _median(values: list[float | None]) -> float | None:
     return median(known) if known else None
 
 
-def _rounds_note(values: list[float | None], show: Callable[[float], str], then: str = "round 1: ") -> str:
+def _rounds_note(
+    values: list[float | None], show: Callable[[float], str], then: str | None = "round 1: "
+) -> str:
     """Each round's value as `show` writes it ("-" where a round gave none), before the note that follows
-    (`then` names what it shows), when there was more than one round."""
+    (`then` names what it shows; None: no note follows), when there was more than one round."""
     if len(values) < 2:
         return ""
     known = sum(value is not None for value in values)
     figures = ", ".join("-" if value is None else show(value) for value in values)
-    return f"median of {known} interleaved {'round' if known == 1 else 'rounds'} ({figures}); {then}"
+    rounds = f"median of {known} interleaved {'round' if known == 1 else 'rounds'} ({figures})"
+    return rounds if then is None else f"{rounds}; {then}"
 
 
 def _round_medians(rounds: list[dict[str, Any]]) -> tuple[dict[str, Any], dict[str, Any] | None]:
