@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from tools import camera_probe
-from tools.bench import costs, renderers, report, scenes
+from tools.bench import costs, renderers, report, sampling, scenes
 from tools.bench.e2e import Bench
 
 CAMERA_HZ, LIDAR_HZ, POSE_HZ, SCALE_CAMERA_HZ = 30.0, scenes.LIDAR_HZ, 100.0, 10.0
@@ -29,8 +29,9 @@ def more_rounds(
     scene: str,
     topics: list[str],
     kinds: tuple[str, ...] = ("bridge", "forwarder", "receive_floor"),
+    rounds: int = LATENCY_ROUNDS,
 ) -> list[dict[str, Any]]:
-    """LATENCY_ROUNDS - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
+    """`rounds` - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
     the receive loop alone), in an order rotated by one each round so that a slow spell of the host falls
     on each of them in turn. The first round is the case's main runs."""
 
@@ -47,15 +48,16 @@ def more_rounds(
 
     runs = {"bridge": bridge, "forwarder": forwarder, "receive_floor": receive_floor}
     names = list(kinds)
-    rounds = []
-    for n in range(1, LATENCY_ROUNDS):
+    more = []
+    for n in range(1, rounds):
         order = names[n % len(names) :] + names[: n % len(names)]
-        rounds.append({name: runs[name](n + 1) for name in order})
-    return rounds
+        more.append({name: runs[name](n + 1) for name in order})
+    return more
 
 
-def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
-    """Every end-to-end figure. Each bridge session measures at most one heavy topic (docs/performance.md)."""
+def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS) -> dict[str, Any]:
+    """Every end-to-end figure, the latency cases in `rounds` interleaved rounds. Each bridge session
+    measures at most one heavy topic (docs/performance.md)."""
     out: dict[str, Any] = {
         "baselines": {},
         "bridge": {},
@@ -95,7 +97,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         floor["camera"] = session.probe("forwarder_camera", camera_topics)
         floor["camera_apart"] = session.probe("forwarder_camera_apart", pose_only, apart=image_only)
     out["receive_floor"]["camera"] = bench.receive_floor(single, camera=True)
-    out["rounds"]["camera"] = more_rounds(bench, "camera", single, camera_topics)
+    out["rounds"]["camera"] = more_rounds(bench, "camera", single, camera_topics, rounds=rounds)
     with bench.bridge_session(hd) as session:
         out["bridge"]["camera_720p"] = session.probe("camera_720p", camera_topics)
     with bench.forwarder_session(hd, camera=True) as session:
@@ -117,7 +119,9 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
         floor["camera_load"] = session.probe("forwarder_pose_load", loaded)
     with bench.bridge_session(load, runner="mission", profile=profile("mission")) as session:
         out["pose"]["camera_load_mission"] = session.probe("pose_load_mission", loaded)
-    out["rounds"]["camera_load"] = more_rounds(bench, "camera_load", load, loaded, ("bridge", "forwarder"))
+    out["rounds"]["camera_load"] = more_rounds(
+        bench, "camera_load", load, loaded, ("bridge", "forwarder"), rounds
+    )
 
     for drones in SCALE_DRONES:
         scene = bench.scene(f"scale{drones}", drones, scenes.CameraSetup(320, 240, 1 / SCALE_CAMERA_HZ, (0,)))
@@ -128,8 +132,15 @@ def run_e2e(bench: Bench, profile_dir: Path | None) -> dict[str, Any]:
             with bench.forwarder_session(scene, camera=True) as session:
                 floor["scale"] = session.probe(f"forwarder_scale{drones}", topics)
             out["receive_floor"]["scale"] = bench.receive_floor(scene, camera=True)
-            out["rounds"]["scale"] = more_rounds(bench, f"scale{drones}", scene, topics)
+            out["rounds"]["scale"] = more_rounds(bench, f"scale{drones}", scene, topics, rounds=rounds)
     return out
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -138,14 +149,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="shorter measurement windows (3 s)")
     parser.add_argument("--costs-only", action="store_true", help="only the in-process converter costs")
     parser.add_argument("--profile", action="store_true", help="cProfile the bridge node of each session")
+    parser.add_argument(
+        "--rounds",
+        type=_positive,
+        default=LATENCY_ROUNDS,
+        help=f"interleaved rounds of each pose latency case, judged on their median (default "
+        f"{LATENCY_ROUNDS}; more give steadier figures on a noisy host)",
+    )
     args = parser.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     started = time.monotonic()
+    load_at_start = os.getloadavg()[0]
+    host_at_start = sampling.host_sample()
     results: dict[str, Any] = {
         "machine": {
             "cpus": os.cpu_count(),
             "python": platform.python_version(),
-            "load_average_at_start": os.getloadavg()[0],
+            "load_average_at_start": load_at_start,
+            "stolen_share_since_boot": sampling.stolen_share(sampling.HostSample(0, 0), host_at_start),
+            "idle_wake_ms": sampling.wake_delays_ms(),
         },
         "costs": costs.run(),
     }
@@ -161,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
         duration = 3.0 if args.quick else 8.0
         bench = Bench(workdir, warmup_s=2.0, duration_s=duration)
         try:
-            results["e2e"] = run_e2e(bench, profile_dir)
+            results["e2e"] = run_e2e(bench, profile_dir, args.rounds)
         finally:
             bench.close()
         results["workdir"] = str(workdir)
@@ -169,6 +191,7 @@ def main(argv: list[str] | None = None) -> int:
     results["targets"] = report.targets(results)
     results["seconds"] = time.monotonic() - started
     results["machine"]["load_average_at_end"] = os.getloadavg()[0]
+    results["machine"]["stolen_share"] = sampling.stolen_share(host_at_start, sampling.host_sample())
     print(report.targets_table(results["targets"]), flush=True)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -178,9 +201,13 @@ def main(argv: list[str] | None = None) -> int:
         f"results: {out} ({results['seconds']:.0f} s); load average {machine['load_average_at_start']:.1f} "
         f"at start, {machine['load_average_at_end']:.1f} at end, on {machine['cpus']} cores"
     )
+    print(report.host_line(machine))
     slow = report.floor_over_target(results.get("e2e", {}))
     if slow:
         print(slow)
+    noisy = report.noisy_host(machine)
+    if noisy:
+        print(noisy)
     # Only the start counts: at the end the load average includes the bench's own processes.
     if machine["load_average_at_start"] > (machine["cpus"] or 1) / 2:
         print(

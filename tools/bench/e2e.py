@@ -18,7 +18,7 @@ from typing import Any
 
 from tools.bench import scenes
 from tools.bench.baselines import RAW_TOPIC
-from tools.bench.sampling import cpu_share, fault_rate, sample
+from tools.bench.sampling import cpu_share, fault_rate, host_sample, sample, stolen_share
 from tools.rig import Child, Rig, free_port, port_open, wait_until
 
 FIRST_MESSAGE_TIMEOUT_S = 120.0
@@ -115,12 +115,15 @@ class Bench:
 
     def _collect(self, measurer: Child, out: Path, watched: dict[str, Child]) -> dict[str, Any]:
         """The JSON result `measurer` writes to `out` between its `measuring` and `done` lines, with the
-        CPU, RSS and minor faults of the `watched` processes meanwhile."""
+        CPU, RSS and minor faults of the `watched` processes meanwhile, and the share of the machine's
+        CPU time a hypervisor took (`host_stolen_share`)."""
         wait_line(measurer, "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
         before = {name: sample(child.pid) for name, child in watched.items()}
+        host_before = host_sample()
         wait_line(measurer, "done", self.duration_s + 30)
         after = {name: sample(child.pid) for name, child in watched.items()}
         result = self._result(out)
+        result["host_stolen_share"] = stolen_share(host_before, host_sample())
         for name in watched:
             result[f"{name}_cpu_cores"] = cpu_share(before[name], after[name])
             result[f"{name}_rss_mb"] = after[name].rss_mb

@@ -40,3 +40,46 @@ def cpu_share(start: CpuSample, end: CpuSample) -> float:
 def fault_rate(start: CpuSample, end: CpuSample) -> float:
     """Minor page faults per second between two samples."""
     return (end.minor_faults - start.minor_faults) / max(end.wall - start.wall, 1e-9)
+
+
+@dataclass(frozen=True)
+class HostSample:
+    """The machine's CPU time so far, every core together, in clock ticks: all of it, and the part a
+    hypervisor ran other guests in (steal)."""
+
+    total: int
+    stolen: int
+
+
+def host_sample(stat: str | None = None) -> HostSample:
+    """From the first line of /proc/stat (or `stat`, its text): user, nice, system, idle, iowait, irq,
+    softirq and steal make the total (guest time is already in user and nice); steal is 0 where the
+    kernel does not count it."""
+    if stat is None:
+        with open("/proc/stat") as handle:
+            stat = handle.readline()
+    values = [int(v) for v in stat.splitlines()[0].split()[1:9]]
+    return HostSample(sum(values), values[7] if len(values) > 7 else 0)
+
+
+def stolen_share(start: HostSample, end: HostSample) -> float:
+    """The share of the machine's CPU time between two samples that the hypervisor took (0.0 to 1.0)."""
+    return (end.stolen - start.stolen) / max(end.total - start.total, 1)
+
+
+def wake_delays_ms(seconds: float = 2.0, period_s: float = 0.001) -> dict[str, float]:
+    """How late a `period_s` sleep wakes on this host right now: the median, p99 and largest overshoot
+    over `seconds` of back-to-back sleeps, in ms. On an idle machine this is the host's own scheduling
+    delay, a lower bound on every latency the bench measures."""
+    late: list[float] = []
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        start = time.perf_counter()
+        time.sleep(period_s)
+        late.append((time.perf_counter() - start - period_s) * 1e3)
+    ordered = sorted(late)
+    return {
+        "p50": ordered[len(ordered) // 2],
+        "p99": ordered[min(len(ordered) - 1, int(len(ordered) * 0.99))],
+        "max": ordered[-1],
+    }

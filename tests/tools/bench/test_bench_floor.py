@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tools.bench import report, scenes
+from tools.bench.__main__ import main, more_rounds
 from tools.bench.e2e import Bench, BenchError
 
 POSE, IMAGE = scenes.pose_topic(1), scenes.image_topic(1)
@@ -72,6 +73,11 @@ def test_the_forwarder_targets_are_judged_on_the_ratios():
     assert over["2 drones: bridge CPU"] is False
 
 
+def test_a_costs_only_run_has_no_end_to_end_figures_to_judge_or_warn_about():
+    assert report.floor_over_target({}) is None and report.rounds_table({}) == ""
+    assert report.floor_targets({}) == [] and report.latency_rounds({}, "scale") == []
+
+
 def test_without_forwarder_runs_there_is_no_floor_target():
     e2e = _e2e()
     e2e["forwarder"] = {}
@@ -95,6 +101,7 @@ def test_the_bare_forwarder_carries_pose_and_images_from_the_replay_server(tmp_p
         assert pose["rate_hz"] > 50 and image["rate_hz"] > 5
         assert image["message_bytes"] > 320 * 240 * 3
         assert result["forwarder_cpu_cores"] > 0 and result["server_cpu_cores"] > 0
+        assert 0.0 <= result["host_stolen_share"] <= 1.0
 
 
 def test_the_drones_and_pose_latency_targets_name_the_forwarder_and_the_receive_floor():
@@ -247,3 +254,72 @@ def test_the_60_hz_camera_case_is_judged_on_the_median_of_its_rounds_the_mission
     mission = rows["pose p99 under 1080p camera load at 60 Hz (saturating), mission script"]
     assert (mission["value"], mission["met"]) == (10.5, False) and mission["note"].startswith("idle p99")
     assert "1080p camera @60 + pose, round 3" in report.rounds_table(e2e)
+
+
+def test_each_round_shows_the_cpu_time_the_hypervisor_took_during_each_window():
+    e2e = _e2e()
+    bridge = _result("bridge", 0.3, {POSE: (100.0, 9.0), IMAGE: (30.0, 20.0)})
+    forwarder = _result("forwarder", 0.2, {POSE: (100.0, 10.0), IMAGE: (30.0, 15.0)})
+    e2e["bridge"]["camera"]["host_stolen_share"] = 0.021
+    e2e["rounds"] = {"camera": [{"bridge": {**bridge, "host_stolen_share": 0.125}, "forwarder": forwarder}]}
+    table = report.rounds_table(e2e)
+    assert "CPU time stolen %" in table
+    round_1, round_2 = (line for line in table.splitlines() if "1080p camera @30 + pose, round" in line)
+    assert round_1.rstrip(" |").endswith("2.1 / - / -")  # round 1 had no forwarder or floor figure
+    assert round_2.rstrip(" |").endswith("12.5 / - / -")
+
+
+class _RecordingBench:
+    """Stands in for `Bench` in `more_rounds`: records which run came when, measures nothing."""
+
+    def __init__(self) -> None:
+        self.runs: list[str] = []
+
+    def _session(self, kind: str):
+        bench = self
+
+        class Session:
+            def __enter__(self):
+                return self
+
+            def __exit__(self, *exc):
+                return False
+
+            def probe(self, label: str, topics: list[str]) -> dict:
+                bench.runs.append(label)
+                return {"kind": kind}
+
+        return Session()
+
+    def bridge_session(self, scene: str):
+        return self._session("bridge")
+
+    def forwarder_session(self, scene: str, camera: bool):
+        return self._session("forwarder")
+
+    def receive_floor(self, scene: str, camera: bool) -> dict:
+        self.runs.append("receive_floor")
+        return {"kind": "receive_floor"}
+
+
+@pytest.mark.parametrize("rounds", [1, 3, 5])
+def test_more_rounds_runs_each_kind_once_a_round_in_an_order_rotated_by_one(rounds):
+    bench = _RecordingBench()
+    more = more_rounds(bench, "scale10", "scene.jsonc", [POSE], rounds=rounds)  # type: ignore[arg-type]
+    assert len(more) == rounds - 1  # the case's main runs are round 1
+    assert [list(r) for r in more] == [
+        ["forwarder", "receive_floor", "bridge"],
+        ["receive_floor", "bridge", "forwarder"],
+        ["bridge", "forwarder", "receive_floor"],
+        ["forwarder", "receive_floor", "bridge"],
+    ][: rounds - 1]
+    assert all(r[kind]["kind"] == kind for r in more for kind in r)
+    first = ["forwarder_scale10_round2", "receive_floor", "scale10_round2"]
+    assert bench.runs[:3] == first[: len(bench.runs)]
+
+
+@pytest.mark.parametrize("given", ["0", "-2", "two"])
+def test_the_bench_takes_at_least_one_round(given, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["--rounds", given, "--costs-only"])
+    assert stop.value.code == 2 and "--rounds" in capsys.readouterr().err
