@@ -159,13 +159,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     started = time.monotonic()
-    load_at_start = os.getloadavg()[0]
     host_at_start = sampling.host_sample()
     results: dict[str, Any] = {
         "machine": {
             "cpus": os.cpu_count(),
             "python": platform.python_version(),
-            "load_average_at_start": load_at_start,
+            "load_average_at_start": os.getloadavg()[0],
             "stolen_share_since_boot": sampling.stolen_share(sampling.HostSample(0, 0), host_at_start),
             "idle_wake_ms": sampling.wake_delays_ms(),
         },
