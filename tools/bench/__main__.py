@@ -202,6 +202,8 @@ def main(argv: list[str] | None = None) -> int:
             results["e2e"] = run_e2e(bench, profile_dir, args.rounds)
         finally:
             bench.close()
+        results["machine"]["windows"] = bench.windows
+        results["machine"]["windows_retaken"] = bench.windows_retaken
         results["workdir"] = str(workdir)
         print(report.e2e_table(results["e2e"]), flush=True)
     results["targets"] = report.targets(results)

@@ -11,14 +11,14 @@ from __future__ import annotations
 import contextlib
 import json
 import time
-from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from tools.bench import scenes
 from tools.bench.baselines import RAW_TOPIC
-from tools.bench.sampling import cpu_share, fault_rate, host_sample, sample, stolen_share
+from tools.bench.sampling import QUIET_STOLEN_SHARE, cpu_share, fault_rate, host_sample, sample, stolen_share
 from tools.rig import Child, Rig, free_port, port_open, wait_until
 
 FIRST_MESSAGE_TIMEOUT_S = 120.0
@@ -41,6 +41,19 @@ def wait_line(child: Child, word: str, timeout: float) -> None:
     wait_until(seen, timeout, f"{child.name} to print {word!r}", interval=0.1)
 
 
+def quietest(measure: Callable[[], dict[str, Any]], retakes: int) -> dict[str, Any]:
+    """The first result of `measure` whose window was quiet (its `host_stolen_share` under
+    QUIET_STOLEN_SHARE), measuring up to `retakes` more times; else the one that lost the least. Its
+    `windows_measured` says how many windows were measured for it."""
+    results: list[dict[str, Any]] = []
+    for _ in range(1 + retakes):
+        results.append(measure())
+        if results[-1]["host_stolen_share"] < QUIET_STOLEN_SHARE:
+            break
+    best = min(results, key=lambda result: result["host_stolen_share"])
+    return {**best, "windows_measured": len(results)}
+
+
 @dataclass
 class Session:
     bench: Bench
@@ -56,9 +69,15 @@ class Session:
 
 @dataclass
 class Bench:
+    """`retakes`: how many more times a window that was not quiet is measured (`quietest`).
+    `windows` and `windows_retaken` count the windows measured and those taken again."""
+
     workdir: Path
     warmup_s: float = 2.0
     duration_s: float = 8.0
+    retakes: int = 2
+    windows: int = field(default=0, init=False)
+    windows_retaken: int = field(default=0, init=False)
 
     def __post_init__(self) -> None:
         self.procs = Rig(self.workdir)
@@ -79,7 +98,17 @@ class Bench:
     ) -> dict[str, Any]:
         """The probe's result for `topics`, with the `apart` topics (images, say) read by a second probe
         process whose window spans the first's, their figures merged in: a subscriber of `topics` that
-        does not also hold the GIL to read large messages, as in a ROS graph where each node reads its own."""
+        does not also hold the GIL to read large messages, as in a ROS graph where each node reads its own.
+        A window in which a hypervisor took QUIET_STOLEN_SHARE of the CPU time or more is measured again,
+        up to `retakes` times (`quietest`)."""
+        result = quietest(lambda: self._measure_once(label, topics, watched, apart), self.retakes)
+        self.windows += 1
+        self.windows_retaken += result["windows_measured"] > 1
+        return result
+
+    def _measure_once(
+        self, label: str, topics: Sequence[str], watched: dict[str, Child], apart: Sequence[str]
+    ) -> dict[str, Any]:
         if set(topics) & set(apart):
             raise BenchError(f"topics both read together and apart: {sorted(set(topics) & set(apart))}")
         other: tuple[Child, Path] | None = None

@@ -10,7 +10,8 @@ import pytest
 from harness import ROOT
 
 from tools.bench import report
-from tools.bench.sampling import HostSample, host_sample, stolen_share, wake_delays_ms
+from tools.bench.e2e import quietest
+from tools.bench.sampling import QUIET_STOLEN_SHARE, HostSample, host_sample, stolen_share, wake_delays_ms
 
 STAT = "cpu  807605 26193 313546 10859998 6006 0 30925 206029 0 0\ncpu0 1 2 3 4 5 6 7 8 0 0\n"
 
@@ -52,6 +53,34 @@ def test_the_host_line_says_what_the_hypervisor_took_and_how_late_a_sleep_woke()
         "host: 2.1% of the CPU time stolen by the hypervisor during the run (1.7% since boot); idle before "
         "the run, a 1 ms sleep overshot by 0.11 ms at the median, 0.76 ms at p99, 3.40 ms at most"
     )
+
+
+def test_the_host_line_counts_the_windows_taken_again():
+    line = report.host_line({**_machine(0.021, 0.76), "windows": 40, "windows_retaken": 3})
+    assert line.endswith("at most; 3 of 40 measurement windows taken again for losing 0.5% or more")
+
+
+@pytest.mark.parametrize(
+    ("shares", "measured", "kept"),
+    [
+        ([0.0], 1, 0.0),  # quiet at once: measured once
+        ([0.02, 0.001], 2, 0.001),  # taken again, and the quiet one kept
+        ([0.03, QUIET_STOLEN_SHARE, 0.01], 3, QUIET_STOLEN_SHARE),  # never quiet: the least stolen kept
+        ([0.03, 0.02, 0.01, 0.0], 3, 0.01),  # at most two more windows
+    ],
+)
+def test_a_window_that_lost_cpu_time_is_measured_again_and_the_quietest_kept(shares, measured, kept):
+    windows = iter(shares)
+    calls = []
+
+    def measure() -> dict:
+        calls.append(1)
+        share = next(windows)
+        return {"host_stolen_share": share, "p99": 100 * share}
+
+    result = quietest(measure, retakes=2)
+    assert len(calls) == measured and result["windows_measured"] == measured
+    assert result["host_stolen_share"] == kept and result["p99"] == 100 * kept  # the window's own figures
 
 
 @pytest.mark.parametrize(
