@@ -35,7 +35,7 @@ def more_rounds(
     """`rounds` - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
     the receive loop alone), in an order rotated by one each round so that a slow spell of the host falls
     on each of them in turn. The first round is the case's main runs (`first`). While fewer than `rounds`
-    rounds were quiet (`report.judged_rounds`), one more is run, up to `rounds` more in all."""
+    rounds were quiet (`report.quiet_round`), one more is run, up to `rounds` more in all."""
 
     def bridge(n: int) -> dict[str, Any]:
         with bench.bridge_session(scene) as session:
@@ -48,18 +48,15 @@ def more_rounds(
     def receive_floor(n: int) -> dict[str, Any]:
         return bench.receive_floor(scene, camera=True)
 
-    def quiet(round_: dict[str, Any]) -> bool:
-        return report.stolen_in_round(round_) < report.QUIET_STOLEN_SHARE
-
     runs = {"bridge": bridge, "forwarder": forwarder, "receive_floor": receive_floor}
     names = list(kinds)
     more: list[dict[str, Any]] = []
-    calm = int(first is None or quiet(first))
+    calm = int(first is None or report.quiet_round(first))
     n = 1
     while n < rounds or (calm < rounds and n < 2 * rounds):
         order = names[n % len(names) :] + names[: n % len(names)]
         more.append({name: runs[name](n + 1) for name in order})
-        calm += quiet(more[-1])
+        calm += report.quiet_round(more[-1])
         n += 1
     return more
 

@@ -402,11 +402,14 @@ def stolen_in_round(round_: dict[str, Any]) -> float:
     return max((window.get("host_stolen_share") or 0.0 for window in windows), default=0.0)
 
 
+def quiet_round(round_: dict[str, Any]) -> bool:
+    """Neither the bridge's nor the forwarder's window lost QUIET_STOLEN_SHARE of the CPU time or more."""
+    return stolen_in_round(round_) < QUIET_STOLEN_SHARE
+
+
 def judged_rounds(rounds: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """The rounds a latency target is judged on: the quiet ones (neither the bridge's nor the forwarder's
-    window lost QUIET_STOLEN_SHARE of the CPU time or more to a hypervisor), or every round when none was
-    quiet."""
-    return [r for r in rounds if stolen_in_round(r) < QUIET_STOLEN_SHARE] or rounds
+    """The rounds a latency target is judged on: the quiet ones, or every round when none was quiet."""
+    return [r for r in rounds if quiet_round(r)] or rounds
 
 
 def _median(values: list[float | None]) -> float | None:
