@@ -34,8 +34,9 @@ def more_rounds(
 ) -> list[dict[str, Any]]:
     """`rounds` - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
     the receive loop alone), in an order rotated by one each round so that a slow spell of the host falls
-    on each of them in turn. The first round is the case's main runs (`first`). While fewer than `rounds`
-    rounds were quiet (`report.quiet_round`), one more is run, up to `rounds` more in all."""
+    on each of them in turn. The first round is the case's main runs (`first`, as `report.latency_rounds`
+    reads them). While fewer than `rounds` rounds were quiet (`report.quiet_round`), one more is run, up to
+    `rounds` more in all."""
 
     def bridge(n: int) -> dict[str, Any]:
         with bench.bridge_session(scene) as session:
@@ -103,8 +104,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
         floor["camera"] = session.probe("forwarder_camera", camera_topics)
         floor["camera_apart"] = session.probe("forwarder_camera_apart", pose_only, apart=image_only)
     out["receive_floor"]["camera"] = bench.receive_floor(single, camera=True)
-    first = {"bridge": out["bridge"]["camera"], "forwarder": floor["camera"]}
-    first["receive_floor"] = out["receive_floor"]["camera"]
+    first = report.latency_rounds(out, "camera")[0]
     out["rounds"]["camera"] = more_rounds(bench, "camera", single, camera_topics, rounds=rounds, first=first)
     with bench.bridge_session(hd) as session:
         out["bridge"]["camera_720p"] = session.probe("camera_720p", camera_topics)
@@ -127,7 +127,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
         floor["camera_load"] = session.probe("forwarder_pose_load", loaded)
     with bench.bridge_session(load, runner="mission", profile=profile("mission")) as session:
         out["pose"]["camera_load_mission"] = session.probe("pose_load_mission", loaded)
-    first = {"bridge": out["pose"]["camera_load"], "forwarder": floor["camera_load"]}
+    first = report.latency_rounds(out, "camera_load")[0]
     out["rounds"]["camera_load"] = more_rounds(
         bench, "camera_load", load, loaded, ("bridge", "forwarder"), rounds, first
     )
@@ -141,8 +141,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
             with bench.forwarder_session(scene, camera=True) as session:
                 floor["scale"] = session.probe(f"forwarder_scale{drones}", topics)
             out["receive_floor"]["scale"] = bench.receive_floor(scene, camera=True)
-            first = {"bridge": out["scale"][str(drones)], "forwarder": floor["scale"]}
-            first["receive_floor"] = out["receive_floor"]["scale"]
+            first = report.latency_rounds(out, "scale")[0]
             out["rounds"]["scale"] = more_rounds(
                 bench, f"scale{drones}", scene, topics, rounds=rounds, first=first
             )
