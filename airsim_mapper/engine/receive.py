@@ -14,7 +14,15 @@ from typing import Any
 from airsim_mapper.engine.fast_frames import Buffer, decode_map
 from airsim_mapper.logs import ros_logger
 
-__all__ = ["close_client", "decode_body", "receive", "receive_frame", "take_over", "unknown_topic"]
+__all__ = [
+    "close_client",
+    "decode_body",
+    "read_ahead",
+    "receive",
+    "receive_frame",
+    "take_over",
+    "unknown_topic",
+]
 
 log = ros_logger("airsim_mapper.sim")
 FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
@@ -22,6 +30,7 @@ RECEIVE_THREAD = "sim-receive"
 CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
 TAKE_OVER_WAIT_S = 1.0
 CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
+READ_AHEAD_FRAMES = 16  # frames NNG may read off the topics socket before the receive loop takes them
 
 
 def decode_body(body: Buffer, fast: bool) -> tuple[Any, bool]:
@@ -81,6 +90,22 @@ def receive_frame(sock: Any) -> memoryview:
     msg = holder[0]
     body = ffi.gc(lib.nng_msg_body(msg), lambda _body: lib.nng_msg_free(msg))
     return memoryview(ffi.buffer(body, lib.nng_msg_len(msg)))
+
+
+def read_ahead(sock: Any) -> None:
+    """Let NNG read up to READ_AHEAD_FRAMES frames ahead of the receive loop on a pynng socket.
+
+    With pynng's default (no receive buffer) a Pair0 socket holds one frame in its pipe and reads the next
+    only once the loop has taken it, so every frame of a burst (ten robots' poses of one tick) waits for a
+    round trip through NNG's threads. With a few frames of buffer NNG reads on while the loop converts and
+    publishes, and the loop mostly finds the next frame waiting. The bound keeps what a stalled loop can
+    pile up to a few frames (16 1080p images are 100 MB); beyond it the socket pushes back as before.
+    """
+    import pynng
+
+    if isinstance(sock, pynng.Socket):
+        with contextlib.suppress(pynng.exceptions.NNGException):
+            sock.recv_buffer_size = READ_AHEAD_FRAMES
 
 
 @functools.cache

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import gc
+import threading
+import types
 
 import msgpack
 import pynng
 
 from airsim_mapper.engine.fast_frames import parse_frame_header
-from airsim_mapper.engine.receive import decode_body, receive_frame
+from airsim_mapper.engine.receive import READ_AHEAD_FRAMES, decode_body, read_ahead, receive_frame
+from airsim_mapper.engine.sim_link import SimLink
 from airsim_mapper.simserver.protocol import encode_frame
 
 
@@ -28,3 +31,33 @@ def test_a_received_frame_is_a_view_whose_slices_outlive_it(tmp_path):
         # the pixels are still a view of the frame, whose NNG message lives as long as they do
         assert fast and isinstance(message["data"], memoryview) and bytes(message["data"]) == pixels
         assert bytes(receive_frame(client)) == b"second"
+
+
+def test_nng_reads_frames_ahead_of_the_links_receive_loop_in_order(tmp_path):
+    """The link lets NNG read a few frames ahead of its loop (a burst of poses is not taken one round trip
+    through NNG's threads at a time); every frame still arrives, in order."""
+    address, count = f"ipc://{tmp_path}/ahead", 3 * READ_AHEAD_FRAMES
+    got: list = []
+    every = threading.Event()
+
+    def on_message(_info, message) -> None:
+        got.append(message["n"])
+        if len(got) == count:
+            every.set()
+
+    with pynng.Pair0(listen=address, send_timeout=5000) as server, pynng.Pair0(dial=address) as sock:
+        client = types.SimpleNamespace(
+            socket_topics=sock, socket_services=None, recv_topic_thread=None, state=True, topics={}
+        )
+        client.subs = {"/ahead": {"callbacks": [on_message]}}
+        link = SimLink(client)
+        try:
+            assert sock.recv_buffer_size == READ_AHEAD_FRAMES
+            for number in range(count):
+                server.send(encode_frame("/ahead", msgpack.packb({"n": number})))
+            assert every.wait(10) and got == list(range(count))
+        finally:
+            client.state = False
+            client.recv_topic_thread.join(timeout=2)
+            link.stop_loop()
+    read_ahead(types.SimpleNamespace())  # not a pynng socket: nothing to set, no error

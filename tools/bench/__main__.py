@@ -216,9 +216,10 @@ def main(argv: list[str] | None = None) -> int:
         f"at start, {machine['load_average_at_end']:.1f} at end, on {machine['cpus']} cores"
     )
     print(report.host_line(machine))
-    slow = report.floor_over_target(results.get("e2e", {}))
-    if slow:
-        print(slow)
+    e2e = results.get("e2e", {})
+    for slow in (report.floor_over_target(e2e), report.forwarder_over_cpu_target(e2e)):
+        if slow:
+            print(slow)
     noisy = report.noisy_host(machine)
     if noisy:
         print(noisy)

@@ -136,6 +136,16 @@ def test_a_receive_floor_over_the_drones_latency_target_is_called_out():
     assert warning is not None and "8.80 ms, over the 4 ms target" in warning
 
 
+def test_a_forwarder_over_the_drones_cpu_target_is_called_out():
+    e2e = _e2e()
+    assert report.forwarder_over_cpu_target({}) is None  # not measured
+    assert report.forwarder_over_cpu_target(e2e) is None  # the forwarder took 0.1 cores
+    e2e["forwarder"]["scale"]["forwarder_cpu_cores"] = 0.4
+    warning = report.forwarder_over_cpu_target(e2e)
+    assert warning is not None and "took 0.400 cores with 2 drones, over the 0.25-core target" in warning
+    assert "ratio to the forwarder (0.50x)" in warning  # the bridge's 0.2 cores
+
+
 @pytest.mark.live
 def test_the_receive_floor_takes_every_robots_poses_without_ros(tmp_path):
     bench = Bench(tmp_path, warmup_s=0.5, duration_s=2.0)
