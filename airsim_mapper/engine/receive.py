@@ -58,11 +58,13 @@ def receive(client: Any) -> None:
     """The bridge's receive loop on a client's topics socket, until the client stops or the socket closes.
 
     Each frame goes to the client's current link (`SimLink.dispatch`): a malformed frame or a failing
-    callback is dropped and counted there, and the loop goes on.
+    callback is dropped and counted there, and the loop goes on. NNG reads ahead of the loop from its start
+    (`read_ahead`), whichever thread runs it.
     """
     import pynng
 
     sock = client.socket_topics
+    read_ahead(sock)
     read = functools.partial(receive_frame, sock) if isinstance(sock, pynng.Socket) else sock.recv
     while client.state:
         try:

@@ -40,7 +40,6 @@ from airsim_mapper.engine.receive import (
     RECEIVE_THREAD,
     close_client,
     decode_body,
-    read_ahead,
     receive,
     take_over,
     unknown_topic,
@@ -156,7 +155,6 @@ class SimLink:
         if self.dead or client.socket_topics is None:
             return False
         setattr(client, CURRENT_LINK, self)
-        read_ahead(client.socket_topics)
         thread = getattr(client, "recv_topic_thread", None)
         if thread is not None and thread.is_alive():
             return take_over(client)

@@ -52,10 +52,10 @@ def test_nng_reads_frames_ahead_of_the_links_receive_loop_in_order(tmp_path):
         client.subs = {"/ahead": {"callbacks": [on_message]}}
         link = SimLink(client)
         try:
-            assert sock.recv_buffer_size == READ_AHEAD_FRAMES
             for number in range(count):
                 server.send(encode_frame("/ahead", msgpack.packb({"n": number})))
             assert every.wait(10) and got == list(range(count))
+            assert sock.recv_buffer_size == READ_AHEAD_FRAMES  # set by the loop as it started
         finally:
             client.state = False
             client.recv_topic_thread.join(timeout=2)

@@ -499,7 +499,7 @@ def forwarder_over_cpu_target(e2e: dict[str, Any]) -> str | None:
     rounds = judged_rounds(latency_rounds(e2e, "scale"))
     if not rounds:
         return None
-    cores = _median([r["forwarder"]["forwarder_cpu_cores"] for r in rounds]) or 0.0
+    cores = _round_medians(rounds)[0]["forwarder_cpu_cores"] or 0.0
     if cores <= SCALE_CORES:
         return None
     drones = len(_of_kind(rounds[0]["forwarder"], "pose"))
