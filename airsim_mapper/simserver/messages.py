@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,9 @@ def pose(position: np.ndarray, orientation: np.ndarray) -> dict[str, Any]:
     return {"position": vector3(position), "orientation": quaternion(orientation)}
 
 
-def pose_stamped(t_ns: int, position: np.ndarray, orientation: np.ndarray) -> dict[str, Any]:
+def pose_stamped(
+    t_ns: int, position: Sequence[float] | np.ndarray, orientation: Sequence[float] | np.ndarray
+) -> dict[str, Any]:
     """PoseStamped (§5.1): actual_pose / desired_pose."""
     return {"time_stamp": int(t_ns), "position": vector3(position), "orientation": quaternion(orientation)}
 

@@ -162,6 +162,11 @@ class Body:
         with self.lock:
             return self.state.copy()
 
+    def pose(self) -> tuple[list[float], list[float]]:
+        """Position and orientation of one instant, as floats: a snapshot's pose without its rates."""
+        with self.lock:
+            return self.state.position.tolist(), self.state.orientation.tolist()
+
     def teleport(
         self, position: np.ndarray, orientation: np.ndarray, reset_kinematics: bool, now_ns: int | None = None
     ) -> None:
@@ -198,14 +203,11 @@ class Body:
 
     def _at_rest(self) -> bool:
         state = self.state
-        return not any(
-            np.any(v)
-            for v in (
-                state.linear_velocity,
-                state.angular_velocity,
-                state.linear_acceleration,
-                state.angular_acceleration,
-            )
+        return not (
+            state.linear_velocity.any()
+            or state.angular_velocity.any()
+            or state.linear_acceleration.any()
+            or state.angular_acceleration.any()
         )
 
     def _stop_unbounded(self, command: Command | None) -> None:

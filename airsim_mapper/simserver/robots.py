@@ -17,6 +17,7 @@ from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.camera_stream import CameraStream, Render
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import Body
+from airsim_mapper.simserver.protocol import pack_plain
 from airsim_mapper.simserver.robot_params import within_world
 from airsim_mapper.simserver.scene_spec import RobotSpec, SceneSpec
 from airsim_mapper.simserver.sensor_streams import (
@@ -82,6 +83,7 @@ class RobotRuntime:
                 self.instruments.append(stream)
                 self.getters[stream.path] = stream
         self.rotors = RotorStream(f"{self.prefix}/rotor_info", dict(spec.config), self.body, hub)
+        self.multirotor = spec.multirotor  # read every tick: the spec's property parses the config
 
     # -- world queries
 
@@ -123,15 +125,16 @@ class RobotRuntime:
         self.body.tick(dt_s, self._blocked, now_ns)
 
     def publish_pose(self, now_ns: int) -> None:
-        kin = self.body.snapshot()
-        self.hub.publish(self.pose_path, messages.pose_stamped(now_ns, kin.position, kin.orientation))
+        position, orientation = self.body.pose()
+        self.hub.publish(self.pose_path, pack_plain(messages.pose_stamped(now_ns, position, orientation)))
 
     def step_instruments(self, now_ns: int) -> None:
         """Step every instrument on one snapshot of the body, taken when the first one is due."""
-        state = functools.cache(lambda: ground_truth(self.body))
-        for stream in self.instruments:
-            stream.step(now_ns, state)
-        if self.spec.multirotor:
+        if self.instruments:
+            state = functools.cache(lambda: ground_truth(self.body))
+            for stream in self.instruments:
+                stream.step(now_ns, state)
+        if self.multirotor:
             self.rotors.step(now_ns)
 
     def step_cameras(self, now_ns: int) -> bool:

@@ -218,3 +218,15 @@ def test_a_ground_vehicle_rests_on_the_surface_below_wherever_it_is_put():
     rover.run(Velocity([0.0, -2.0, 0.0], 1.0, YawMode()))
     run(rover, 1.0)
     assert rover.state.position == pytest.approx([0.0, 4.0, 0.0], abs=0.01)  # down the step with it
+
+
+def test_a_bodys_pose_is_its_snapshots_position_and_orientation_as_floats():
+    body = body_at(yaw=0.7)
+    body.run(Velocity([1.0, 0.5, 0.0], 10.0, YawMode()))
+    run(body, 0.2)
+    position, orientation = body.pose()
+    snapshot = body.snapshot()
+    assert position == snapshot.position.tolist() and orientation == snapshot.orientation.tolist()
+    assert all(type(value) is float for value in (*position, *orientation))
+    position[0] = 99.0  # a copy: the body is not moved by its reader
+    assert body.state.position[0] != 99.0

@@ -5,6 +5,8 @@ from __future__ import annotations
 import msgpack
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from airsim_mapper.simserver import protocol
 
@@ -166,3 +168,31 @@ def test_a_message_frame_is_the_frame_of_the_packed_message_byte_for_byte(size):
     assert body == protocol.pack({**message, "pose": protocol.float32_array(np.arange(3.0))})
     packed = protocol.message_frame("/t", body)  # an already packed body
     assert packed.frame == protocol.encode_frame("/t", body)
+
+
+plain_values = st.recursive(
+    st.none()
+    | st.booleans()
+    | st.integers(-(2**63), 2**64 - 1)
+    | st.floats(allow_nan=False)
+    | st.text(max_size=40)
+    | st.binary(max_size=300)
+    | st.floats(allow_nan=False).map(np.float64)
+    | st.floats(allow_nan=False, width=32).map(np.float32)
+    | st.integers(-(2**31), 2**31 - 1).map(np.int64)
+    | st.booleans().map(np.bool_),
+    lambda inner: st.lists(inner, max_size=20) | st.dictionaries(st.text(max_size=12), inner, max_size=20),
+    max_leaves=40,
+)
+
+
+@given(plain_values)
+def test_msgpacks_own_packer_gives_the_bytes_of_pack_for_a_message_of_plain_values(message):
+    assert protocol.pack_plain(message) == protocol.pack(message)
+
+
+def test_the_plain_packer_refuses_numpy_arrays_and_raw_chunks_rather_than_pack_them_differently():
+    with pytest.raises(TypeError, match="pack_plain cannot pack ndarray: use pack"):
+        protocol.pack_plain({"pose": np.arange(3.0)})
+    with pytest.raises(TypeError, match="pack_plain cannot pack Raw: use pack"):
+        protocol.pack_plain({"nested": [protocol.Raw(b"\xc0")]})
