@@ -83,7 +83,6 @@ class RobotRuntime:
                 self.instruments.append(stream)
                 self.getters[stream.path] = stream
         self.rotors = RotorStream(f"{self.prefix}/rotor_info", dict(spec.config), self.body, hub)
-        self.multirotor = spec.multirotor  # read every tick: the spec's property parses the config
 
     # -- world queries
 
@@ -134,7 +133,7 @@ class RobotRuntime:
             state = functools.cache(lambda: ground_truth(self.body))
             for stream in self.instruments:
                 stream.step(now_ns, state)
-        if self.multirotor:
+        if self.spec.multirotor:
             self.rotors.step(now_ns)
 
     def step_cameras(self, now_ns: int) -> bool:

@@ -9,6 +9,7 @@ quirk: one row, message type `image`; its CameraInfo is not published, so the to
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from collections.abc import Mapping
@@ -95,8 +96,9 @@ class RobotSpec:
         """A ground robot driven by the simple-drive controller (SetRoverControls, MoveByHeading)."""
         return self.controller_type == "simple-drive-api"
 
-    @property
+    @functools.cached_property
     def multirotor(self) -> bool:
+        """Read every physics tick: parsed from the config once."""
         return self.controller_type is not None and not self.rover
 
     @property

@@ -246,7 +246,7 @@ def test_a_robots_instruments_publish_every_tick_from_one_snapshot_of_the_body(m
     }
     robot = SimpleNamespace(
         body=body,
-        multirotor=False,
+        spec=SimpleNamespace(multirotor=False),
         instruments=[
             InstrumentStream(SensorSpec(k, k, cfg), "/r", body, world, hub, HOME, 0)
             for k, cfg in configs.items()
