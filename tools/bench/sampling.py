@@ -71,6 +71,11 @@ def stolen_share(start: HostSample, end: HostSample) -> float:
     return (end.stolen - start.stolen) / max(end.total - start.total, 1)
 
 
+def p99(ordered: list[float]) -> float:
+    """The 99th percentile of sorted values, as the bench reads it: the value at index 0.99 n."""
+    return ordered[min(len(ordered) - 1, int(len(ordered) * 0.99))]
+
+
 def wake_delays_ms(seconds: float = 2.0, period_s: float = 0.001) -> dict[str, float]:
     """How late a `period_s` sleep wakes on this host right now: the median, p99 and largest overshoot
     over `seconds` of back-to-back sleeps, in ms. On an idle machine this is the host's own scheduling
@@ -84,6 +89,6 @@ def wake_delays_ms(seconds: float = 2.0, period_s: float = 0.001) -> dict[str, f
     ordered = sorted(late)
     return {
         "p50": ordered[len(ordered) // 2],
-        "p99": ordered[min(len(ordered) - 1, int(len(ordered) * 0.99))],
+        "p99": p99(ordered),
         "max": ordered[-1],
     }

@@ -88,23 +88,28 @@ def write_scene(
     folder.mkdir(parents=True, exist_ok=True)
     robot_file = f"robot_{name}.jsonc"
     (folder / robot_file).write_text(json.dumps(robot_config(camera, lidar), indent=1))
-    scene = {
+    scene_file = f"scene_{name}.jsonc"
+    (folder / scene_file).write_text(json.dumps(scene_config(name, drones, robot_file), indent=1))
+    return scene_file
+
+
+def scene_config(name: str, drones: int, robot: str | dict[str, Any]) -> dict[str, Any]:
+    """The scene of `drones` drones in a row; `robot` is their robot config's file name, or the config
+    itself inlined (as the client sends a scene to LoadScene)."""
+    return {
         "id": f"Bench{name.title().replace('_', '')}",
         "actors": [
             {
                 "type": "robot",
                 "name": f"Drone{i + 1}",
                 "origin": {"xyz": f"0.0 {3.0 * i:.1f} -3.0", "rpy-deg": "0 0 0"},
-                "robot-config": robot_file,
+                "robot-config": robot,
             }
             for i in range(drones)
         ],
         "clock": {"type": "real-time"},
         "home-geo-point": {"latitude": 47.641468, "longitude": -122.140165, "altitude": 122.0},
     }
-    scene_file = f"scene_{name}.jsonc"
-    (folder / scene_file).write_text(json.dumps(scene, indent=1))
-    return scene_file
 
 
 def pose_topic(drone: int) -> str:

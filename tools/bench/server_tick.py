@@ -29,6 +29,7 @@ from airsim_mapper.simserver.session import Session
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world_file import load_world
 from tools.bench import scenes
+from tools.bench.sampling import p99
 from tools.rig import free_port
 
 TICK_GAP_S = 0.003  # the server's physics tick period in the bench's scenes
@@ -37,18 +38,7 @@ TICK_GAP_S = 0.003  # the server's physics tick period in the bench's scenes
 def scene_text(drones: int) -> str:
     """The bench's drone scene with its robot config inlined, as the client sends it to LoadScene."""
     robot = scenes.robot_config(scenes.CameraSetup(320, 240, 0.1), lidar=False)
-    actors = [
-        {
-            "type": "robot",
-            "name": f"Drone{i + 1}",
-            "origin": {"xyz": f"0.0 {3.0 * i:.1f} -3.0", "rpy-deg": "0 0 0"},
-            "robot-config": robot,
-        }
-        for i in range(drones)
-    ]
-    home = {"latitude": 47.641468, "longitude": -122.140165, "altitude": 122.0}
-    scene = {"id": "BenchTick", "actors": actors, "clock": {"type": "real-time"}, "home-geo-point": home}
-    return json.dumps(scene)
+    return json.dumps(scenes.scene_config("tick", drones, robot))
 
 
 def _drain(client: pynng.Pair0, stop: threading.Event, received: list[int]) -> None:
@@ -89,7 +79,7 @@ def run(drones: int, ticks: int) -> dict[str, Any]:
     return {
         "drones": drones,
         "p50_ms": p50,
-        "p99_ms": durations[min(len(durations) - 1, int(len(durations) * 0.99))],
+        "p99_ms": p99(durations),
         "us_per_drone": 1000.0 * p50 / drones,
         "poses_received": received[0],
     }
