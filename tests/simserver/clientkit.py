@@ -49,6 +49,17 @@ def subscribe(client: Any, topic: str) -> Inbox:
     return inbox
 
 
+def settle(client: Any, fence: str, timeout: float = 5.0) -> None:
+    """Return once the server has taken every subscription this client sent so far.
+
+    The client's `subscribe` returns without waiting for the server, and steps go on the services socket,
+    so a paused step can reach the server before a subscription sent ahead of it, and a lazy sensor then
+    has no subscriber to sample for. The server reads the topics socket in order and answers a
+    subscription to a topic with a last value (`fence`: a robot's pose) at once, so that answer arriving
+    means the subscriptions before it are in place."""
+    subscribe(client, fence).wait_for(1, timeout)
+
+
 @functools.cache
 def _merged_config(scene_file: str, sim_config: Path) -> str:
     from projectairsim.utils import load_scene_config_as_dict

@@ -13,7 +13,7 @@ from projectairsim.types import ImageType, Pose
 from projectairsim.utils import unpack_image
 
 from airsim_mapper.simserver.camera_model import segmentation_color
-from simserver.clientkit import scene_config, subscribe
+from simserver.clientkit import scene_config, settle, subscribe
 
 BALL_SEGMENTATION_ID = 11  # OrangeBall of the built-in world, at (20, 20, -3) with radius 1
 
@@ -53,6 +53,7 @@ def test_the_chase_camera_boxes_the_orange_ball_it_sees(client):
     assert drone.set_pose(pose, True) is True
     world.pause()
     inbox = subscribe(client, drone.sensors["Chase"]["scene_camera"])
+    settle(client, drone.robot_info["actual_pose"])
     world.continue_for_sim_time(100_000_000, wait_until_complete=True)
     published = inbox.wait_for()[-1]
     images = drone.get_images("Chase", [ImageType.SCENE, ImageType.SEGMENTATION])

@@ -14,7 +14,7 @@ from projectairsim import Drone, EnvActor, World
 from projectairsim.rover import Rover
 from projectairsim.types import Pose
 
-from simserver.clientkit import position, scene_config, subscribe
+from simserver.clientkit import position, scene_config, settle, subscribe
 
 ROTORS = ["Prop_FR", "Prop_RL", "Prop_FL", "Prop_RR"]
 
@@ -351,6 +351,7 @@ def test_compress_and_pixels_as_float_are_packed_as_the_real_server_packs_them(c
     drone = Drone(client, world, "Drone1")
     world.pause()
     inbox = subscribe(client, drone.sensors["DownCamera"]["scene_camera"])
+    settle(client, drone.robot_info["actual_pose"])
     world.continue_for_sim_time(200_000_000, wait_until_complete=True)
     published = inbox.wait_for()[-1]
     assert published["encoding"] == "PNG"

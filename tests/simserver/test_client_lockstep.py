@@ -7,7 +7,7 @@ import time
 
 from projectairsim import World
 
-from simserver.clientkit import load_world, subscribe
+from simserver.clientkit import load_world, settle, subscribe
 
 STEP_NS = 3_000_000  # scene_drone_sensors' clock step
 CAMERA_PERIOD_NS = 50_000_000  # Chase: capture-interval 0.05
@@ -47,6 +47,7 @@ def test_paused_stepping_never_loses_a_camera_image_or_lidar_scan(client):
     camera = Watch(subscribe(client, f"{sensors}/Chase/scene_camera"), CAMERA_PERIOD_NS, start)
     lidar = Watch(subscribe(client, f"{sensors}/lidar1/lidar"), LIDAR_PERIOD_NS, start)
     battery = subscribe(client, f"{sensors}/Battery/battery")
+    settle(client, f"{world.parent_topic}/robots/Drone1/actual_pose")
     now = start
     for _ in range(200):
         now = world.continue_for_single_step(wait_until_complete=True)
@@ -96,6 +97,7 @@ def test_paused_steps_publish_every_instrument_and_a_lidar_segment_per_physics_s
         "lidar1": "lidar",
     }
     inboxes = {sensor: subscribe(client, f"{sensors}/{sensor}/{leaf}") for sensor, leaf in leaves.items()}
+    settle(client, f"{world.parent_topic}/robots/Drone1/actual_pose")
     start = world.get_sim_time()
     now = start
     for _ in range(30):

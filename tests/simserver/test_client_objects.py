@@ -15,7 +15,7 @@ from projectairsim.planners import AStarPlanner
 from projectairsim.types import Pose
 from projectairsim.utils import unpack_image
 
-from simserver.clientkit import load_world, scene_config, subscribe
+from simserver.clientkit import load_world, scene_config, settle, subscribe
 
 
 def pose(x: float, y: float, z: float) -> Pose:
@@ -81,6 +81,7 @@ def test_a_spawned_gltf_model_is_seen_by_the_camera_and_in_the_voxel_grid(client
     drone.set_pose(pose(0.0, 60.0, -20.0), True)  # over open ground
     world.pause()  # lock-step: every image due in a step is rendered before the step replies
     inbox = subscribe(client, drone.sensors["DownCamera"]["depth_planar_camera"])
+    settle(client, drone.robot_info["actual_pose"])
 
     def centre_depth() -> float:
         inbox.messages.clear()
