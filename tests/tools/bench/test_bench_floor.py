@@ -340,6 +340,7 @@ class _RecordingBench:
     def __init__(self, stolen: dict[int, float] | None = None) -> None:
         self.runs: list[str] = []
         self.stolen = stolen or {}
+        self.cameras: list[bool] = []  # what the forwarder's and the receive loop's runs were asked
 
     def _measured(self, label: str, kind: str) -> dict:
         self.runs.append(label)
@@ -364,9 +365,11 @@ class _RecordingBench:
         return self._session("bridge")
 
     def forwarder_session(self, scene: str, camera: bool):
+        self.cameras.append(camera)
         return self._session("forwarder")
 
     def receive_floor(self, scene: str, camera: bool) -> dict:
+        self.cameras.append(camera)
         return self._measured("receive_floor", "receive_floor")
 
 
@@ -384,6 +387,31 @@ def test_more_rounds_runs_each_kind_once_a_round_in_an_order_rotated_by_one(roun
     assert all(r[kind]["kind"] == kind for r in more for kind in r)
     first = ["forwarder_scale10_round2", "receive_floor", "scale10_round2"]
     assert bench.runs[:3] == first[: len(bench.runs)]
+
+
+@pytest.mark.parametrize("camera", [True, False])
+def test_more_rounds_subscribe_the_camera_only_when_asked(camera):
+    bench = _RecordingBench()
+    more_rounds(bench, "pose_idle", "scene.jsonc", [POSE], rounds=3, camera=camera)  # type: ignore[arg-type]
+    assert bench.cameras == [camera] * 4  # two rounds of the forwarder and the receive loop
+
+
+def test_pose_only_cpu_is_judged_on_the_median_of_its_rounds():
+    e2e = _e2e()  # round 1: 0.05 against 0.04 cores, 1.25x
+    e2e["rounds"] = {
+        "pose_idle": [
+            {
+                "bridge": _result("bridge", bridge, {POSE: (100.0, 1.0)}),
+                "forwarder": _result("forwarder", 0.04, {POSE: (100.0, 1.0)}),
+            }
+            for bridge in (0.06, 0.04)
+        ]
+    }
+    row = next(t for t in report.floor_targets(e2e) if t["target"].startswith("pose only"))
+    assert row["value"] == pytest.approx(1.25) and row["met"] is True
+    assert row["note"] == "median of 3 interleaved rounds (1.25x, 1.50x, 1.00x)"
+    table = report.rounds_table(e2e)
+    assert "pose @100, round 3" in table and "0.040 / 0.040" in table
 
 
 @pytest.mark.parametrize(
