@@ -78,7 +78,9 @@ def test_topic_frames_end_a_stall_as_an_answer_does_and_the_reason_names_the_pro
     rig.ros.publishers[IMU_ROS].subscribers(1)
     link = rig.links[0]
     link.answering = False
-    wait_until(lambda: rig.engine.state == STALE, 10, what="the stall")
+    # the stall's status, not only its state: the status goes out just after the state changes, and the
+    # connected status before the stall would otherwise pass the wait for the connected one below
+    wait_until(lambda: [s["state"] for s in rig.statuses()][-1:] == [STALE], 10, what="the stall's status")
     flowing = threading.Event()
 
     def simulator_sending() -> None:  # the topics connection is back, the probes' one not yet
