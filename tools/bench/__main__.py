@@ -172,9 +172,9 @@ def main(argv: list[str] | None = None) -> int:
         "--rounds",
         type=_positive,
         default=LATENCY_ROUNDS,
-        help=f"interleaved rounds of each pose latency case, judged on the median of the quiet ones; a "
-        f"round that lost CPU time to a hypervisor is run again, up to N more (default {LATENCY_ROUNDS}; "
-        "more give steadier figures on a noisy host)",
+        help="interleaved rounds of each pose latency case and of pose only's CPU, judged on the median of "
+        "the quiet ones; a round that lost CPU time to a hypervisor is run again, up to N more (default "
+        f"{LATENCY_ROUNDS}; more give steadier figures on a noisy host)",
     )
     args = parser.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
