@@ -224,7 +224,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(report.host_line(machine))
     e2e = results.get("e2e", {})
-    for slow in (report.floor_over_target(e2e), report.forwarder_over_cpu_target(e2e)):
+    for slow in (
+        report.floor_over_target(e2e),
+        report.forwarder_over_latency_target(e2e),
+        report.forwarder_over_cpu_target(e2e),
+    ):
         if slow:
             print(slow)
     noisy = report.noisy_host(machine)

@@ -520,6 +520,25 @@ def forwarder_over_cpu_target(e2e: dict[str, Any]) -> str | None:
     )
 
 
+def forwarder_over_latency_target(e2e: dict[str, Any]) -> str | None:
+    """A warning when the bare forwarder alone missed the drones' pose latency target (the median over the
+    judged rounds): a rospy subscriber got no better through the client on this host during the run, and
+    the bridge's ratio to the forwarder is the figure to read."""
+    rounds = judged_rounds(latency_rounds(e2e, "scale"))
+    if not rounds:
+        return None
+    p99 = _median([_worst_pose(r["forwarder"])[1] for r in rounds]) or 0.0
+    if p99 <= SCALE_POSE_P99_MS:
+        return None
+    ratio = _median([_p99_ratio(r["bridge"], r["forwarder"]) for r in rounds])
+    return (
+        f"warning: the bare forwarder alone had a worst pose p99 of {_ms(p99)} ms"
+        f"{f' (the median of {len(rounds)} rounds)' if len(rounds) > 1 else ''}, over the "
+        f"{SCALE_POSE_P99_MS:g} ms target: a plain rospy subscriber got no better through the client on this "
+        f"host during the run; the bridge's ratio to the forwarder ({_x(ratio)}) is the figure to read"
+    )
+
+
 def _p99_ratio(ours: dict[str, Any], floor: dict[str, Any]) -> float | None:
     """The bridge's worst pose p99 over the bare forwarder's."""
     return _ratio(_worst_pose(ours)[1], _worst_pose(floor)[1])

@@ -146,6 +146,16 @@ def test_a_forwarder_over_the_drones_cpu_target_is_called_out():
     assert "ratio to the forwarder (0.50x)" in warning  # the bridge's 0.2 cores
 
 
+def test_a_forwarder_over_the_drones_latency_target_is_called_out():
+    e2e = _e2e()
+    assert report.forwarder_over_latency_target({}) is None  # not measured
+    assert report.forwarder_over_latency_target(e2e) is None  # the forwarder's worst p99 was 3 ms
+    e2e["forwarder"]["scale"]["topics"][scenes.pose_topic(2)]["latency_p99_ms"] = 6.0
+    warning = report.forwarder_over_latency_target(e2e)
+    assert warning is not None and "worst pose p99 of 6.00 ms, over the 4 ms target" in warning
+    assert "ratio to the forwarder (0.50x)" in warning  # the bridge's 3 ms
+
+
 @pytest.mark.live
 def test_the_receive_floor_takes_every_robots_poses_without_ros(tmp_path):
     bench = Bench(tmp_path, warmup_s=0.5, duration_s=2.0)
