@@ -224,13 +224,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(report.host_line(machine))
     e2e = results.get("e2e", {})
-    for slow in (
+    for warning in (
         report.floor_over_target(e2e),
         report.forwarder_over_latency_target(e2e),
         report.forwarder_over_cpu_target(e2e),
     ):
-        if slow:
-            print(slow)
+        if warning:
+            print(warning)
     noisy = report.noisy_host(machine)
     if noisy:
         print(noisy)
