@@ -484,18 +484,32 @@ def noisy_host(machine: dict[str, Any]) -> str | None:
     )
 
 
+def _scale_rounds(e2e: dict[str, Any]) -> list[dict[str, Any]]:
+    """The ten drones' judged rounds (every quiet one, or all when none was quiet)."""
+    return judged_rounds(latency_rounds(e2e, "scale"))
+
+
+def _median_worst_p99(rounds: list[dict[str, Any]], role: str) -> tuple[float | None, int]:
+    """The median over the rounds of one role's worst pose p99, and how many rounds had that role."""
+    p99s = [_worst_pose(r[role])[1] for r in rounds if role in r]
+    return _median(p99s), len(p99s)
+
+
+def _of_rounds(count: int) -> str:
+    """The suffix that says a figure is a median of rounds (nothing for one round)."""
+    return f" (the median of {count} rounds)" if count > 1 else ""
+
+
 def floor_over_target(e2e: dict[str, Any]) -> str | None:
     """A warning when the receive floor alone (no ROS) missed the drones' pose latency target (the median
     over the rounds): then the host was too slow during the run for any bridge to meet it, and the ratios
     are the figures to read."""
-    rounds = judged_rounds(latency_rounds(e2e, "scale"))
-    floors = [_worst_pose(r["receive_floor"])[1] for r in rounds if "receive_floor" in r]
-    p99 = _median(floors) or 0.0
-    if p99 <= SCALE_POSE_P99_MS:
+    p99, known = _median_worst_p99(_scale_rounds(e2e), "receive_floor")
+    if (p99 or 0.0) <= SCALE_POSE_P99_MS:
         return None
     return (
         f"warning: the poses through the receive loop alone, no ROS, had a worst p99 of {_ms(p99)} ms"
-        f"{f' (the median of {len(floors)} rounds)' if len(floors) > 1 else ''}, "
+        f"{_of_rounds(known)}, "
         f"over the {SCALE_POSE_P99_MS:g} ms target: the host was too slow for that target during this "
         "run, whatever the bridge does"
     )
@@ -505,7 +519,7 @@ def forwarder_over_cpu_target(e2e: dict[str, Any]) -> str | None:
     """A warning when the bare forwarder alone took more CPU than the drones' target (the median over the
     judged rounds): the host was slower during the run than the one the target was set on, and the
     bridge's ratio to the forwarder is the figure to read."""
-    rounds = judged_rounds(latency_rounds(e2e, "scale"))
+    rounds = _scale_rounds(e2e)
     if not rounds:
         return None
     cores = _round_medians(rounds)[0]["forwarder_cpu_cores"] or 0.0
@@ -524,17 +538,17 @@ def forwarder_over_latency_target(e2e: dict[str, Any]) -> str | None:
     """A warning when the bare forwarder alone missed the drones' pose latency target (the median over the
     judged rounds): a plain rospy subscriber got no better through the client on this host during the run,
     and the bridge's p99 over the forwarder's (their medians) is the figure to read."""
-    rounds = judged_rounds(latency_rounds(e2e, "scale"))
+    rounds = _scale_rounds(e2e)
     if not rounds:
         return None
-    p99 = _median([_worst_pose(r["forwarder"])[1] for r in rounds]) or 0.0
-    if p99 <= SCALE_POSE_P99_MS:
+    p99, known = _median_worst_p99(rounds, "forwarder")
+    if (p99 or 0.0) <= SCALE_POSE_P99_MS:
         return None
     drones = len(_of_kind(rounds[0]["forwarder"], "pose"))
-    ratio = _ratio(_median([_worst_pose(r["bridge"])[1] for r in rounds]), p99)
+    ratio = _ratio(_median_worst_p99(rounds, "bridge")[0], p99)
     return (
         f"warning: the bare forwarder alone had a worst pose p99 of {_ms(p99)} ms with {drones} drones"
-        f"{f' (the median of {len(rounds)} rounds)' if len(rounds) > 1 else ''}, over the "
+        f"{_of_rounds(known)}, over the "
         f"{SCALE_POSE_P99_MS:g} ms target: a plain rospy subscriber got no better through the client on this "
         f"host during the run; the bridge's p99 over the forwarder's ({_x(ratio)}) is the figure to read"
     )
