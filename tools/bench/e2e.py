@@ -70,12 +70,14 @@ class Session:
 @dataclass
 class Bench:
     """`retakes`: how many more times a window that was not quiet is measured (`quietest`).
+    `probe_malloc`: the probes' malloc thresholds (probe.py), for the probes started from then on.
     `windows` and `windows_retaken` count the windows measured and those taken again."""
 
     workdir: Path
     warmup_s: float = 2.0
     duration_s: float = 8.0
     retakes: int = 2
+    probe_malloc: str = "fixed"
     windows: int = field(default=0, init=False)
     windows_retaken: int = field(default=0, init=False)
 
@@ -133,7 +135,7 @@ class Bench:
         out = self.workdir / f"probe_{label}.json"
         out.unlink(missing_ok=True)  # a result of an earlier run under the same label is not this one's
         args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(duration_s)]
-        args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), *topics]
+        args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), "--malloc", self.probe_malloc, *topics]
         return self.module(f"probe_{label}", "tools.bench.probe", *args), out
 
     @staticmethod

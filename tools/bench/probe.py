@@ -6,9 +6,15 @@ works. Every message delivered is counted: with a `queue_size`, rospy keeps only
 messages one read of the socket brings, so a probe that fell behind by one pose would drop the older
 one, from the rate and from the latencies alike. It waits until every topic delivered once, lets them
 run for --warmup s, prints `measuring`, records for --duration s, prints `done` and writes its JSON
-result to --out.
+result to --out, with its own minor page faults in the window.
 
-    python -m tools.bench.probe --out result.json [--warmup S] [--duration S] TOPIC...
+It keeps its read buffers in the heap as the bridge does (`tuning.keep_frame_buffers`), as
+docs/ros-usage.md tells a user's node that reads large images to: with glibc's adaptive malloc thresholds
+the probe's own page faults on each image held its pose callback back by milliseconds, through either
+bridge, and varied from run to run by more than the bench's targets leave (docs/performance.md, "The
+probe's own allocator"). `--malloc glibc` leaves glibc's thresholds, for that comparison.
+
+    python -m tools.bench.probe --out result.json [--warmup S] [--duration S] [--malloc glibc] TOPIC...
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import struct
 import threading
 import time
@@ -25,6 +32,9 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper import tuning
+
+MALLOC_CHOICES = ("fixed", "glibc")  # the probe's malloc thresholds: as the bridge's, or glibc's adaptive
 HEADER = struct.Struct("<III")
 SOCKET_BUFFER = 1 << 24
 
@@ -58,6 +68,11 @@ def summary(record: TopicRecord, seconds: float) -> dict[str, Any]:
     return out
 
 
+def minor_faults() -> int:
+    """This process's minor page faults so far."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+
+
 def main(argv: list[str] | None = None) -> int:
     import rospy
 
@@ -67,7 +82,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--warmup", type=float, default=2.0)
     parser.add_argument("--duration", type=float, default=8.0)
     parser.add_argument("--first-timeout", type=float, default=60.0)
+    parser.add_argument("--malloc", choices=MALLOC_CHOICES, default="fixed")
     args = parser.parse_args(rospy.myargv(argv)[1:] if argv is None else argv)
+    if args.malloc == "fixed":
+        tuning.keep_frame_buffers()
     rospy.init_node("bench_probe", anonymous=True, disable_signals=True)
     records = {topic: TopicRecord() for topic in args.topics}
     lock = threading.Lock()
@@ -106,15 +124,15 @@ def main(argv: list[str] | None = None) -> int:
     time.sleep(args.warmup)
     with lock:
         state["recording"] = True
-        start = time.monotonic()
+        start, faults = time.monotonic(), minor_faults()
     print("measuring", flush=True)
     time.sleep(args.duration)
     with lock:
         state["recording"] = False
-        seconds = time.monotonic() - start
+        seconds, faults = time.monotonic() - start, minor_faults() - faults
     print("done", flush=True)
     result = {topic: summary(record, seconds) for topic, record in records.items()}
-    write_result(args.out, {"seconds": seconds, "topics": result})
+    write_result(args.out, {"seconds": seconds, "probe_minor_faults": faults, "topics": result})
     for subscriber in subscribers:
         subscriber.unregister()
     rospy.signal_shutdown("probe done")

@@ -5,9 +5,12 @@ tools/bench/node.py (`--malloc glibc` leaves glibc's adaptive malloc thresholds,
 with pynng's `recv`), next to the bare forwarder. `--drones N`: N drones, each pose @100 + 320x240 @10,
 through the node with the default mapping, with the previous default (camera frames converted per pose,
 camera_pose eager; pose_path.PREVIOUS) and with the previous receive path as well, next to the forwarder.
-Prints CPU, minor page faults per image frame, RSS, the slowest pose rate and the worst pose p99.
+`--probe-malloc`: the bridge and the forwarder only, each session read in turn by the probe with its
+malloc thresholds fixed (the bench's) and with glibc's (probe.py). Prints CPU, minor page faults per image
+frame, RSS, the slowest pose rate and the worst pose p99 (the mean over rounds, then each round's).
 
     python -m tools.bench.variants [--rounds 2] [--duration 8] [--width 1920 --height 1080] [--drones N]
+        [--probe-malloc]
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from typing import Any
 from tools.bench import scenes
 from tools.bench.e2e import Bench
 from tools.bench.pose_path import PREVIOUS
+from tools.bench.probe import MALLOC_CHOICES
 from tools.bench.report import _table
 
 VARIANTS: dict[str, tuple[str, ...]] = {
@@ -53,6 +57,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--width", type=int, default=1920)
     parser.add_argument("--height", type=int, default=1080)
     parser.add_argument("--drones", type=int, default=0, help="the pose case: N drones instead")
+    parser.add_argument(
+        "--probe-malloc", action="store_true", help="the bridge and the forwarder through both probes"
+    )
     args = parser.parse_args(argv)
     bench = Bench(Path(tempfile.mkdtemp(prefix="airsim_mapper_variants_")), duration_s=args.duration)
     load_start = os.getloadavg()[0]
@@ -68,7 +75,15 @@ def main(argv: list[str] | None = None) -> int:
                 ("--mapping", str(previous), "--malloc", "glibc", "--receive", "copy")
             ),
         }
-    rows: dict[str, list[dict[str, float]]] = {name: [] for name in [*variants, "bare forwarder"]}
+    probes: tuple[str, ...] = (bench.probe_malloc,)
+    if args.probe_malloc:
+        variants, probes = {"bridge": ()}, MALLOC_CHOICES
+
+    def label(name: str, probe: str) -> str:
+        return f"{name}, probe malloc {probe}" if args.probe_malloc else name
+
+    sides = [*variants, "bare forwarder"]
+    rows: dict[str, list[dict[str, float]]] = {label(n, p): [] for n in sides for p in probes}
     drones = args.drones or 1
     topics = [t for i in range(1, drones + 1) for t in (scenes.image_topic(i), scenes.pose_topic(i))]
     try:
@@ -77,12 +92,16 @@ def main(argv: list[str] | None = None) -> int:
         else:
             camera = scenes.CameraSetup(args.width, args.height, 1 / 30, (0,))
         scene = bench.scene("variants", drones, camera)
-        for _ in range(args.rounds):
-            for name, options in variants.items():
-                with bench.bridge_session(scene, node_args=options) as session:
-                    rows[name].append(figures(session.probe("variant", topics), "bridge"))
-            with bench.forwarder_session(scene, camera=True) as session:
-                rows["bare forwarder"].append(figures(session.probe("forwarder", topics), "forwarder"))
+        for n in range(args.rounds):
+            for name in sides:
+                if name == "bare forwarder":
+                    session_of, role = bench.forwarder_session(scene, camera=True), "forwarder"
+                else:
+                    session_of, role = bench.bridge_session(scene, node_args=variants[name]), "bridge"
+                with session_of as session:
+                    for probe in probes[n % len(probes) :] + probes[: n % len(probes)]:
+                        bench.probe_malloc = probe
+                        rows[label(name, probe)].append(figures(session.probe(role, topics), role))
     finally:
         bench.close()
     body = []
@@ -99,8 +118,9 @@ def main(argv: list[str] | None = None) -> int:
                 f"{mean('rss'):.0f}",
                 f"{mean('image_hz'):.1f}",
                 f"{mean('pose_hz'):.1f}",
-                f"{mean('pose_p99'):.1f}",
+                f"{mean('pose_p99'):.2f}",
                 " ".join(f"{r['cpu']:.3f}" for r in runs),
+                " ".join(f"{r['pose_p99']:.2f}" for r in runs),
             ]
         )
     header = [
@@ -112,6 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         "pose Hz min",
         "pose p99 max",
         "CPU runs",
+        "pose p99 runs",
     ]
     print(_table(header, body))
     case = f"{drones} drones, 320x240 @10" if args.drones else f"{args.width}x{args.height} @30"
