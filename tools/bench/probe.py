@@ -6,7 +6,7 @@ works. Every message delivered is counted: with a `queue_size`, rospy keeps only
 messages one read of the socket brings, so a probe that fell behind by one pose would drop the older
 one, from the rate and from the latencies alike. It waits until every topic delivered once, lets them
 run for --warmup s, prints `measuring`, records for --duration s, prints `done` and writes its JSON
-result to --out, with its own minor page faults in the window.
+result to --out, with its own minor page faults in the window and its malloc thresholds.
 
 It keeps its read buffers in the heap as the bridge does (`tuning.keep_frame_buffers`), as
 docs/ros-usage.md tells a user's node that reads large images to: with glibc's adaptive malloc thresholds
@@ -84,8 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--first-timeout", type=float, default=60.0)
     parser.add_argument("--malloc", choices=MALLOC_CHOICES, default="fixed")
     args = parser.parse_args(rospy.myargv(argv)[1:] if argv is None else argv)
-    if args.malloc == "fixed":
-        tuning.keep_frame_buffers()
+    # what the thresholds are: glibc's when asked, or when tuning is off (AIRSIM_MAPPER_NO_TUNING)
+    malloc = "fixed" if args.malloc == "fixed" and tuning.keep_frame_buffers() else "glibc"
     rospy.init_node("bench_probe", anonymous=True, disable_signals=True)
     records = {topic: TopicRecord() for topic in args.topics}
     lock = threading.Lock()
@@ -132,7 +132,9 @@ def main(argv: list[str] | None = None) -> int:
         seconds, faults = time.monotonic() - start, minor_faults() - faults
     print("done", flush=True)
     result = {topic: summary(record, seconds) for topic, record in records.items()}
-    write_result(args.out, {"seconds": seconds, "probe_minor_faults": faults, "topics": result})
+    write_result(
+        args.out, {"seconds": seconds, "probe_malloc": malloc, "probe_minor_faults": faults, "topics": result}
+    )
     for subscriber in subscribers:
         subscriber.unregister()
     rospy.signal_shutdown("probe done")

@@ -7,7 +7,8 @@ through the node with the default mapping, with the previous default (camera fra
 camera_pose eager; pose_path.PREVIOUS) and with the previous receive path as well, next to the forwarder.
 `--probe-malloc`: the bridge and the forwarder only, each session read in turn by the probe with its
 malloc thresholds fixed (the bench's) and with glibc's (probe.py). Prints CPU, minor page faults per image
-frame, RSS, the slowest pose rate and the worst pose p99 (the mean over rounds, then each round's).
+frame (the bridge's, the probe's), RSS, the slowest pose rate and the worst pose p99 (the mean over rounds,
+then each round's).
 
     python -m tools.bench.variants [--rounds 2] [--duration 8] [--width 1920 --height 1080] [--drones N]
         [--probe-malloc]
@@ -40,9 +41,11 @@ def figures(result: dict[str, Any], role: str) -> dict[str, float]:
     images = [t for name, t in topics.items() if name.endswith("/image")]
     poses = [t for name, t in topics.items() if name.endswith("actual_pose")]
     image_hz = sum(t["rate_hz"] for t in images)
+    frames = max(image_hz * result["seconds"], 1e-9)
     return {
         "cpu": result[f"{role}_cpu_cores"],
         "faults_per_frame": result[f"{role}_minor_faults_per_s"] / max(image_hz, 1e-9),
+        "probe_faults_per_frame": result["probe_minor_faults"] / frames,
         "rss": result[f"{role}_rss_mb"],
         "image_hz": image_hz / len(images),
         "pose_hz": min(t["rate_hz"] for t in poses),
@@ -115,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
                 name,
                 f"{mean('cpu'):.3f}",
                 f"{mean('faults_per_frame'):.0f}",
+                f"{mean('probe_faults_per_frame'):.0f}",
                 f"{mean('rss'):.0f}",
                 f"{mean('image_hz'):.1f}",
                 f"{mean('pose_hz'):.1f}",
@@ -127,6 +131,7 @@ def main(argv: list[str] | None = None) -> int:
         "variant",
         "CPU cores",
         "faults/frame",
+        "probe faults/frame",
         "RSS MB",
         "image Hz",
         "pose Hz min",

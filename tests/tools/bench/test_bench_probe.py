@@ -61,4 +61,5 @@ def test_the_probe_reads_large_images_without_faulting_their_buffers_in(launcher
     result = json.loads(out.read_text())
     images = result["topics"][RAW_TOPIC]["count"]
     assert images > 10, result
+    assert result["probe_malloc"] == "fixed", result
     assert result["probe_minor_faults"] / images < MAX_FAULTS_PER_IMAGE, result
