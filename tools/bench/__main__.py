@@ -16,7 +16,7 @@ from typing import Any
 
 from tools import camera_probe
 from tools.bench import costs, renderers, report, sampling, scenes
-from tools.bench.e2e import Bench
+from tools.bench.e2e import Bench, rotated
 
 CAMERA_HZ, LIDAR_HZ, POSE_HZ, SCALE_CAMERA_HZ = 30.0, scenes.LIDAR_HZ, 100.0, 10.0
 SCALE_DRONES = (1, 2, 5, 10)
@@ -57,8 +57,7 @@ def more_rounds(
     calm = int(first is None or report.quiet_round(first))
     n = 1
     while n < rounds or (calm < rounds and n < 2 * rounds):
-        order = names[n % len(names) :] + names[: n % len(names)]
-        more.append({name: runs[name](n + 1) for name in order})
+        more.append({name: runs[name](n + 1) for name in rotated(names, n)})
         calm += report.quiet_round(more[-1])
         n += 1
     return more

@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from tools.bench import scenes
 from tools.bench.baselines import RAW_TOPIC
@@ -25,8 +25,17 @@ FIRST_MESSAGE_TIMEOUT_S = 120.0
 APART_MARGIN_S = 5.0  # how long a second probe's window outlasts the first's: the first's start-up
 
 
+T = TypeVar("T")
+
+
 class BenchError(RuntimeError):
     """The benchmark could not start or finish one of its runs."""
+
+
+def rotated(items: Sequence[T], n: int) -> list[T]:
+    """`items` rotated left by `n`: round `n`'s order, so that no side is always measured first."""
+    k = n % len(items)
+    return [*items[k:], *items[:k]]
 
 
 def wait_line(child: Child, word: str, timeout: float) -> None:
@@ -61,23 +70,25 @@ class Session:
     node: Child
     role: str = "bridge"  # the node's name in the results: bridge, or forwarder (the floor)
 
-    def probe(self, label: str, topics: Sequence[str], apart: Sequence[str] = ()) -> dict[str, Any]:
+    def probe(
+        self, label: str, topics: Sequence[str], apart: Sequence[str] = (), malloc: str = "fixed"
+    ) -> dict[str, Any]:
         """Rate and latency of `topics`, with the CPU (cores) and RSS of the node and server meanwhile;
-        `apart` topics are read by a second probe process at the same time (see `Bench.measure`)."""
-        return self.bench.measure(label, topics, {self.role: self.node, "server": self.server}, apart)
+        `apart` topics are read by a second probe process at the same time (see `Bench.measure`), each
+        probe with `malloc`'s thresholds (probe.py)."""
+        watched = {self.role: self.node, "server": self.server}
+        return self.bench.measure(label, topics, watched, apart, malloc)
 
 
 @dataclass
 class Bench:
     """`retakes`: how many more times a window that was not quiet is measured (`quietest`).
-    `probe_malloc`: the probes' malloc thresholds (probe.py), for the probes started from then on.
     `windows` and `windows_retaken` count the windows measured and those taken again."""
 
     workdir: Path
     warmup_s: float = 2.0
     duration_s: float = 8.0
     retakes: int = 2
-    probe_malloc: str = "fixed"
     windows: int = field(default=0, init=False)
     windows_retaken: int = field(default=0, init=False)
 
@@ -96,29 +107,40 @@ class Bench:
     # -- measuring
 
     def measure(
-        self, label: str, topics: Sequence[str], watched: dict[str, Child], apart: Sequence[str] = ()
+        self,
+        label: str,
+        topics: Sequence[str],
+        watched: dict[str, Child],
+        apart: Sequence[str] = (),
+        malloc: str = "fixed",
     ) -> dict[str, Any]:
         """The probe's result for `topics`, with the `apart` topics (images, say) read by a second probe
         process whose window spans the first's, their figures merged in: a subscriber of `topics` that
         does not also hold the GIL to read large messages, as in a ROS graph where each node reads its own.
         A window in which a hypervisor took QUIET_STOLEN_SHARE of the CPU time or more is measured again,
         up to `retakes` times (`quietest`)."""
-        result = quietest(lambda: self._measure_once(label, topics, watched, apart), self.retakes)
+        result = quietest(lambda: self._measure_once(label, topics, watched, apart, malloc), self.retakes)
         self.windows += 1
         self.windows_retaken += result["windows_measured"] > 1
         return result
 
     def _measure_once(
-        self, label: str, topics: Sequence[str], watched: dict[str, Child], apart: Sequence[str]
+        self,
+        label: str,
+        topics: Sequence[str],
+        watched: dict[str, Child],
+        apart: Sequence[str],
+        malloc: str,
     ) -> dict[str, Any]:
         if set(topics) & set(apart):
             raise BenchError(f"topics both read together and apart: {sorted(set(topics) & set(apart))}")
         other: tuple[Child, Path] | None = None
         try:
             if apart:
-                other = self._probe(f"{label}_apart", apart, self.warmup_s + self.duration_s + APART_MARGIN_S)
+                span = self.warmup_s + self.duration_s + APART_MARGIN_S
+                other = self._probe(f"{label}_apart", apart, span, malloc)
                 wait_line(other[0], "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
-            probe, out = self._probe(label, topics, self.duration_s)
+            probe, out = self._probe(label, topics, self.duration_s, malloc)
             try:
                 result = self._collect(probe, out, watched)
             finally:
@@ -131,11 +153,11 @@ class Bench:
             if other is not None:
                 self.procs.stop(other[0])
 
-    def _probe(self, label: str, topics: Sequence[str], duration_s: float) -> tuple[Child, Path]:
+    def _probe(self, label: str, topics: Sequence[str], duration_s: float, malloc: str) -> tuple[Child, Path]:
         out = self.workdir / f"probe_{label}.json"
         out.unlink(missing_ok=True)  # a result of an earlier run under the same label is not this one's
         args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(duration_s)]
-        args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), "--malloc", self.probe_malloc, *topics]
+        args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), "--malloc", malloc, *topics]
         return self.module(f"probe_{label}", "tools.bench.probe", *args), out
 
     @staticmethod

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from tools.bench import scenes
-from tools.bench.e2e import Bench
+from tools.bench.e2e import Bench, rotated
 from tools.bench.pose_path import PREVIOUS
 from tools.bench.probe import MALLOC_CHOICES
 from tools.bench.report import _table
@@ -41,11 +41,11 @@ def figures(result: dict[str, Any], role: str) -> dict[str, float]:
     images = [t for name, t in topics.items() if name.endswith("/image")]
     poses = [t for name, t in topics.items() if name.endswith("actual_pose")]
     image_hz = sum(t["rate_hz"] for t in images)
-    frames = max(image_hz * result["seconds"], 1e-9)
+    per_frame = 1 / max(image_hz, 1e-9)  # seconds per image frame
     return {
         "cpu": result[f"{role}_cpu_cores"],
-        "faults_per_frame": result[f"{role}_minor_faults_per_s"] / max(image_hz, 1e-9),
-        "probe_faults_per_frame": result["probe_minor_faults"] / frames,
+        "faults_per_frame": result[f"{role}_minor_faults_per_s"] * per_frame,
+        "probe_faults_per_frame": result["probe_minor_faults"] / result["seconds"] * per_frame,
         "rss": result[f"{role}_rss_mb"],
         "image_hz": image_hz / len(images),
         "pose_hz": min(t["rate_hz"] for t in poses),
@@ -78,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
                 ("--mapping", str(previous), "--malloc", "glibc", "--receive", "copy")
             ),
         }
-    probes: tuple[str, ...] = (bench.probe_malloc,)
+    probes: tuple[str, ...] = ("fixed",)
     if args.probe_malloc:
         variants, probes = {"bridge": ()}, MALLOC_CHOICES
 
@@ -102,9 +102,9 @@ def main(argv: list[str] | None = None) -> int:
                 else:
                     session_of, role = bench.bridge_session(scene, node_args=variants[name]), "bridge"
                 with session_of as session:
-                    for probe in probes[n % len(probes) :] + probes[: n % len(probes)]:
-                        bench.probe_malloc = probe
-                        rows[label(name, probe)].append(figures(session.probe(role, topics), role))
+                    for probe in rotated(probes, n):
+                        result = session.probe(role, topics, malloc=probe)
+                        rows[label(name, probe)].append(figures(result, role))
     finally:
         bench.close()
     body = []
