@@ -15,6 +15,7 @@ from airsim_mapper.engine.fast_frames import Buffer, decode_map
 from airsim_mapper.logs import ros_logger
 
 __all__ = [
+    "ReceiveTimeout",
     "close_client",
     "decode_body",
     "read_ahead",
@@ -31,6 +32,8 @@ CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames a
 TAKE_OVER_WAIT_S = 1.0
 CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
 READ_AHEAD_FRAMES = 16  # frames NNG may read off the topics socket before the receive loop takes them
+RECV_TIMEOUT_MS = 100  # the loop's receive timeout while frames arrive, as the client's own loop has it
+IDLE_RECV_TIMEOUT_MS = 1000  # the longest, reached by doubling while no frame arrives
 
 
 def decode_body(body: Buffer, fast: bool) -> tuple[Any, bool]:
@@ -65,18 +68,53 @@ def receive(client: Any) -> None:
 
     sock = client.socket_topics
     read_ahead(sock)
-    read = functools.partial(receive_frame, sock) if isinstance(sock, pynng.Socket) else sock.recv
+    nng = isinstance(sock, pynng.Socket)
+    read = functools.partial(receive_frame, sock) if nng else sock.recv
+    timeout = ReceiveTimeout(sock if nng else None)
     while client.state:
         try:
             packed = read()
         except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
+            timeout.idle()
             continue
         except pynng.exceptions.Closed:
             return
         except pynng.exceptions.NNGException as exc:
             getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
             continue
+        timeout.busy()
         getattr(client, CURRENT_LINK).dispatch(packed)
+
+
+class ReceiveTimeout:
+    """The receive loop's timeout on a pynng topics socket: RECV_TIMEOUT_MS while frames arrive, doubled
+    at each expiry while none does, up to IDLE_RECV_TIMEOUT_MS.
+
+    The loop wakes at each expiry only to see whether the client stopped (`state`), and each expiry costs
+    NNG's timer and worker threads far more CPU than the wake itself: at 100 ms they were most of what a
+    node waiting for a scene used (docs/performance.md). While frames arrive the timer never expires, so
+    a busy loop is unaffected; `close_client` closes the socket, which ends the wait at once."""
+
+    def __init__(self, sock: Any | None) -> None:
+        self.sock = sock  # None: not a pynng socket, nothing to set
+        self.ms = RECV_TIMEOUT_MS
+        self._set()
+
+    def idle(self) -> None:
+        """The wait expired without a frame: wait longer next time."""
+        if self.ms < IDLE_RECV_TIMEOUT_MS:
+            self.ms = min(2 * self.ms, IDLE_RECV_TIMEOUT_MS)
+            self._set()
+
+    def busy(self) -> None:
+        """A frame arrived: back to the short wait."""
+        if self.ms != RECV_TIMEOUT_MS:
+            self.ms = RECV_TIMEOUT_MS
+            self._set()
+
+    def _set(self) -> None:
+        if self.sock is not None:
+            self.sock.recv_timeout = self.ms
 
 
 def receive_frame(sock: Any) -> memoryview:
@@ -162,12 +200,15 @@ def unknown_topic(topic: str) -> Any:
 
 def close_client(client: Any) -> None:
     """Close a client's sockets at once, without talking to the server; joins its receive thread."""
-    client.state = False  # ends the receive loop within its 100 ms receive timeout
+    client.state = False  # the receive loop ends at its next frame or timeout ...
+    _close(getattr(client, "socket_topics", None))  # ... or at once, on the closed socket
     thread = getattr(client, "recv_topic_thread", None)
     if thread is not None and thread.is_alive() and thread is not threading.current_thread():
         thread.join(timeout=2)
-    for name in ("socket_topics", "socket_services"):
-        sock = getattr(client, name, None)
-        if sock is not None:
-            with contextlib.suppress(Exception):
-                sock.close()
+    _close(getattr(client, "socket_services", None))
+
+
+def _close(sock: Any) -> None:
+    if sock is not None:
+        with contextlib.suppress(Exception):
+            sock.close()

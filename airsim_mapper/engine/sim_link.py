@@ -160,7 +160,6 @@ class SimLink:
             return take_over(client)
         if thread is not None and not client.state:
             return False  # disconnected on purpose
-        client.socket_topics.recv_timeout = 100  # bounded block so the loop sees `state` change
         client.recv_topic_thread = threading.Thread(target=receive, args=(client,), name=RECEIVE_THREAD)
         client.recv_topic_thread.daemon = True
         client.recv_topic_thread.start()
