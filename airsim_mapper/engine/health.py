@@ -33,7 +33,6 @@ PROBE_MISSES = 3
 FRAMES_FRESH_S = PROBE_TIMEOUT_S + PROBE_PERIOD_S
 PROBE_METHOD = "/Sim/GetBuildCommitHash"  # cheap, side-effect free, answered by every server
 FIRST_ANSWER_S = 10.0  # a new connection's first answer; NNG's own handshake timeout is also 10 s
-CLIENT_RECV_TIMEOUT_MS = 300000  # the client's own services timeout, restored after the first answer
 PORT_CHECK_S = 0.5  # a refused connection: how long each port is tried, to say which one refused
 RETRY_FIRST_S = 0.25
 RETRY_STEPS: tuple[tuple[int, float], ...] = (
@@ -119,7 +118,7 @@ def open_client(
     except Exception as exc:
         _close_sockets(client)
         raise SimUnreachable(address, *ports, unreachable_reason(address, ports, exc)) from None
-    if not first_answer_within(client, first_answer):
+    if not answered_within(client, first_answer):
         _close_sockets(client)
         raise _silent(address, ports, first_answer)
     return client
@@ -168,17 +167,32 @@ def _silent(address: str, ports: tuple[int, int], seconds: float) -> SimUnreacha
     return SimUnreachable(address, *ports, closed) if closed else SimSilent(address, *ports, seconds)
 
 
-def first_answer_within(client: Any, seconds: float) -> bool:
-    """Whether a freshly connected client's server answers one cheap request within `seconds`."""
+def answered_within(client: Any, seconds: float) -> bool:
+    """Whether the client's server answers one cheap request within `seconds`.
+
+    The request goes out and is awaited on the calling thread, on an NNG context of its own with its own
+    timeouts (the socket's, and other requests, are left alone): a blocking call costs a fraction of a
+    request through the link's asyncio loop, which takes several thread hand-offs each way."""
+    from pynng import lib
+    from pynng.exceptions import check_err
+
     sock = client.socket_services
-    sock.recv_timeout = max(1, int(seconds * 1000))
+    if sock is None:
+        return False
     try:
-        sock.send(client.preprocess_request({"method": PROBE_METHOD, "params": {}, "version": 1.0}))
-        client.postprocess_response(sock.recv_msg())
+        ctx = sock.new_context()
+    except Exception:
+        return False
+    try:
+        for option in (b"send-timeout", b"recv-timeout"):  # NNG_OPT_SENDTIMEO, NNG_OPT_RECVTIMEO
+            check_err(lib.nng_ctx_set_ms(ctx.context, option, max(1, int(seconds * 1000))))
+        ctx.send(client.preprocess_request({"method": PROBE_METHOD, "params": {}, "version": 1.0}))
+        client.postprocess_response(ctx.recv_msg())
     except Exception:
         return False
     finally:
-        sock.recv_timeout = CLIENT_RECV_TIMEOUT_MS
+        with contextlib.suppress(Exception):
+            ctx.close()
     return True
 
 

@@ -33,7 +33,7 @@ from typing import Any
 
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.fast_frames import Buffer, parse_frame_header
-from airsim_mapper.engine.health import PROBE_METHOD
+from airsim_mapper.engine.health import answered_within
 from airsim_mapper.engine.receive import (
     CURRENT_LINK,
     FAST_MIN_BYTES,
@@ -239,12 +239,8 @@ class SimLink:
         return self.connection.connected()
 
     def probe(self, timeout: float) -> bool:
-        """One cheap request: did the server answer within `timeout` seconds?"""
-        try:
-            self.call(PROBE_METHOD, {}, timeout=timeout)
-        except SimLinkError:
-            return False
-        return True
+        """One cheap request, on the calling thread: did the server answer within `timeout` seconds?"""
+        return not self.dead and answered_within(self.client, timeout)
 
     def mark_dead(self) -> None:
         """From now on every call fails at once; subscriptions are only remembered."""
