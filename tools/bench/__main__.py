@@ -120,6 +120,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
     lean = scenes.write_mapping_without_camera_frames(bench.config_dir)
     with bench.bridge_session(single, node_args=("--mapping", str(lean))) as session:
         out["pose"]["idle_without_camera_frames"] = session.probe("pose_idle_lean", pose_only)
+    out["pose"]["waiting"] = bench.waiting_node()  # no scene: nothing arrives, nothing is published
     with bench.bridge_session(single, profile=profile("depth")) as session:
         out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
     with bench.bridge_session(single, profile=profile("lidar")) as session:

@@ -18,11 +18,20 @@ from typing import Any, TypeVar
 
 from tools.bench import scenes
 from tools.bench.baselines import RAW_TOPIC
-from tools.bench.sampling import QUIET_STOLEN_SHARE, cpu_share, fault_rate, host_sample, sample, stolen_share
+from tools.bench.sampling import (
+    QUIET_STOLEN_SHARE,
+    cpu_share,
+    fault_rate,
+    host_sample,
+    sample,
+    stolen_share,
+    threads_cpu_s,
+)
 from tools.rig import Child, Rig, free_port, port_open, wait_until
 
 FIRST_MESSAGE_TIMEOUT_S = 120.0
 APART_MARGIN_S = 5.0  # how long a second probe's window outlasts the first's: the first's start-up
+WAITING_LINE = "no --scene: waiting for a scene"  # the node's log line once it waits (cli/node.py)
 
 
 T = TypeVar("T")
@@ -215,6 +224,32 @@ class Bench:
         args += [*(["--profile", profile] if profile else []), *node_args]
         with self._replay_client("bridge", "tools.bench.node", scene_file, "bridge", args) as session:
             yield session
+
+    def waiting_node(self) -> dict[str, Any]:
+        """The node started without a scene, connected to a replay server and waiting for one: its CPU
+        (from its threads' schedstat, `sampling.threads_cpu_s`) and RSS over a window in which nothing
+        arrives and nothing is published."""
+        server, topics_port, services_port = self._replay_server("WARNING")
+        node: Child | None = None
+        try:
+            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
+            ports = ["--topicsport", str(topics_port), "--servicesport", str(services_port)]
+            node = self.module("waiting_bridge", "tools.bench.node", *ports, "--nodename", "bench_waiting")
+            wait_until(lambda: WAITING_LINE in node.output(), FIRST_MESSAGE_TIMEOUT_S, "the node to wait")
+            time.sleep(self.warmup_s)
+            start, cpu_s, host_before = time.monotonic(), threads_cpu_s(node.pid), host_sample()
+            time.sleep(self.duration_s)
+            seconds, cpu_s = time.monotonic() - start, threads_cpu_s(node.pid) - cpu_s
+            return {
+                "seconds": seconds,
+                "bridge_cpu_cores": cpu_s / seconds,
+                "bridge_rss_mb": sample(node.pid).rss_mb,
+                "host_stolen_share": stolen_share(host_before, host_sample()),
+            }
+        finally:
+            if node is not None:
+                self.procs.stop(node)
+            self.procs.stop(server)
 
     @contextlib.contextmanager
     def forwarder_session(self, scene_file: str, camera: bool = False) -> Iterator[Session]:

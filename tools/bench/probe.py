@@ -68,9 +68,10 @@ def summary(record: TopicRecord, seconds: float) -> dict[str, Any]:
     return out
 
 
-def minor_faults() -> int:
-    """This process's minor page faults so far."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+def usage() -> tuple[int, float]:
+    """This process's minor page faults and CPU seconds (user + system) so far."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    return own.ru_minflt, own.ru_utime + own.ru_stime
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -124,16 +125,23 @@ def main(argv: list[str] | None = None) -> int:
     time.sleep(args.warmup)
     with lock:
         state["recording"] = True
-        start, faults = time.monotonic(), minor_faults()
+        start, (faults, cpu_s) = time.monotonic(), usage()
     print("measuring", flush=True)
     time.sleep(args.duration)
     with lock:
         state["recording"] = False
-        seconds, faults = time.monotonic() - start, minor_faults() - faults
+        seconds, (faults_end, cpu_end) = time.monotonic() - start, usage()
     print("done", flush=True)
     result = {topic: summary(record, seconds) for topic, record in records.items()}
     write_result(
-        args.out, {"seconds": seconds, "probe_malloc": malloc, "probe_minor_faults": faults, "topics": result}
+        args.out,
+        {
+            "seconds": seconds,
+            "probe_malloc": malloc,
+            "probe_minor_faults": faults_end - faults,
+            "probe_cpu_cores": (cpu_end - cpu_s) / seconds,
+            "topics": result,
+        },
     )
     for subscriber in subscribers:
         subscriber.unregister()

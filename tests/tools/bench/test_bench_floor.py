@@ -431,6 +431,22 @@ def test_pose_only_cpu_is_judged_on_the_median_of_its_rounds():
     assert "pose @100, round 3" in table and "0.040 / 0.040" in table
 
 
+def test_pose_only_cpu_is_judged_on_each_nodes_cpu_over_its_probes_in_the_same_window():
+    """A round whose bridge window ran on a host half as fast: the probe's CPU doubled with the bridge's."""
+    e2e = _e2e()
+    e2e["pose"]["idle"]["probe_cpu_cores"] = 0.01  # 0.05 / 0.01 against 0.04 / 0.008: 1.00x (raw 1.25x)
+    e2e["forwarder"]["pose_idle"]["probe_cpu_cores"] = 0.008
+    slow = _result("bridge", 0.08, {POSE: (100.0, 1.0)}) | {"probe_cpu_cores": 0.016}
+    fast = _result("forwarder", 0.04, {POSE: (100.0, 1.0)}) | {"probe_cpu_cores": 0.008}
+    e2e["rounds"] = {"pose_idle": [{"bridge": slow, "forwarder": fast}] * 2}
+    row = next(t for t in report.floor_targets(e2e) if t["target"].startswith("pose only"))
+    assert row["value"] == pytest.approx(1.0) and row["met"] is True
+    assert row["note"] == (
+        "median of 3 interleaved rounds (1.00x, 1.00x, 1.00x); "
+        "each node's CPU over its probe's in the same window (raw: 1.25x, 2.00x, 2.00x)"
+    )
+
+
 @pytest.mark.parametrize(
     ("first_stolen", "stolen", "rounds_run"),
     [

@@ -3,15 +3,25 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+import threading
+import time
 
 import pytest
 from harness import ROOT
 
 from tools.bench import report
 from tools.bench.e2e import quietest
-from tools.bench.sampling import QUIET_STOLEN_SHARE, HostSample, host_sample, stolen_share, wake_delays_ms
+from tools.bench.sampling import (
+    QUIET_STOLEN_SHARE,
+    HostSample,
+    host_sample,
+    stolen_share,
+    threads_cpu_s,
+    wake_delays_ms,
+)
 
 STAT = "cpu  807605 26193 313546 10859998 6006 0 30925 206029 0 0\ncpu0 1 2 3 4 5 6 7 8 0 0\n"
 
@@ -111,3 +121,24 @@ def test_a_costs_only_bench_run_completes_with_the_host_line_and_writes_its_resu
     assert 0.0 <= machine["stolen_share"] <= 1.0 and 0.0 <= machine["stolen_share_since_boot"] <= 1.0
     assert set(machine["idle_wake_ms"]) == {"p50", "p99", "max"}
     assert "e2e" not in results and any(t["target"].startswith("100k-point scan") for t in results["targets"])
+
+
+def test_the_threads_cpu_counts_what_a_thread_of_this_process_spent():
+    def spin() -> None:
+        until = time.thread_time() + 0.2
+        while time.thread_time() < until:
+            pass
+
+    before = threads_cpu_s(os.getpid())
+    thread = threading.Thread(target=spin)
+    thread.start()
+    time.sleep(0.05)  # measured while the thread is still alive: only live threads are counted
+    mid = threads_cpu_s(os.getpid())
+    thread.join()
+    assert mid > before
+    assert threads_cpu_s(os.getpid()) >= before  # the thread's time went with it; never negative
+
+
+def test_the_waiting_nodes_row_shows_its_cpu_to_a_thousandth_of_a_core():
+    row = report.waiting_row({"bridge_cpu_cores": 0.00453, "bridge_rss_mb": 98.6})
+    assert row == ["bridge waiting for a scene", "-", "-", "-", "0.005 (bridge)", "-", "99"]

@@ -1,5 +1,6 @@
 """The bench's probe counts every message delivered to it, however they bunch up on its socket, and reads
-large images without faulting their buffers in again (its malloc thresholds fixed, as the bridge's)."""
+large images without faulting their buffers in again (its malloc thresholds fixed, as the bridge's); the
+bench measures the node while it waits for a scene."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 from harness import ROOT, Rig
 
 from tools.bench.baselines import RAW_TOPIC
+from tools.bench.e2e import Bench
 
 pytestmark = pytest.mark.live
 
@@ -63,3 +65,14 @@ def test_the_probe_reads_large_images_without_faulting_their_buffers_in(launcher
     assert images > 10, result
     assert result["probe_malloc"] == "fixed", result
     assert result["probe_minor_faults"] / images < MAX_FAULTS_PER_IMAGE, result
+
+
+def test_the_bench_measures_the_node_once_it_waits_for_a_scene(tmp_path) -> None:
+    bench = Bench(tmp_path, warmup_s=0.5, duration_s=2.0)
+    try:
+        result = bench.waiting_node()
+    finally:
+        bench.close()
+    assert 1.9 < result["seconds"] < 10
+    assert 0 < result["bridge_cpu_cores"] < 0.5 and result["bridge_rss_mb"] > 20
+    assert 0 <= result["host_stolen_share"] <= 1
