@@ -55,6 +55,7 @@ __all__ = ["SETTINGS", "SettingError", "connect", "given_settings", "main", "par
 __all__ += ["run", "values"]
 
 log = ros_logger("airsim_mapper.node")
+WAITING_FOR_SCENE = "no --scene: waiting for a scene file name on"  # logged with the topic, once waiting
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -301,7 +302,7 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
         if not settings["scene"]:
             topics = [b.ros for b in wrapper.bridges if b.converter == "load_scene"]
             waiting_on = " or ".join(topics) or "(the mapping has no load_scene rule)"
-            log.info("no --scene: waiting for a scene file name on %s", waiting_on)
+            log.info("%s %s", WAITING_FOR_SCENE, waiting_on)
         reloader = serve_reload(
             wrapper.engine, settings["mapping"], prepared.mapping, watch=not args.no_watch
         )

@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -167,26 +168,32 @@ def _silent(address: str, ports: tuple[int, int], seconds: float) -> SimUnreacha
     return SimUnreachable(address, *ports, closed) if closed else SimSilent(address, *ports, seconds)
 
 
-def answered_within(client: Any, seconds: float) -> bool:
+def answered_within(client: Any, seconds: float, encode: Callable[[dict], bytes] | None = None) -> bool:
     """Whether the client's server answers one cheap request within `seconds`.
 
     The request goes out and is awaited on the calling thread, on an NNG context of its own with its own
-    timeouts (the socket's, and other requests, are left alone): a blocking call costs a fraction of a
-    request through the link's asyncio loop, which takes several thread hand-offs each way."""
-    from pynng import lib
-    from pynng.exceptions import check_err
+    timeouts (the socket's, and other requests, are left alone), the reply within what is left of
+    `seconds` after the send: a blocking call costs a fraction of a request through the link's asyncio
+    loop, which takes several thread hand-offs each way. `encode` makes the request's bytes (the client's
+    `preprocess_request`, which numbers requests from a generator: a link that also sends from another
+    thread passes its own, locked, encoder)."""
+    from airsim_mapper.engine.receive import nng_handles
 
-    sock = client.socket_services
+    _ffi, lib, check_err = nng_handles()
+    sock = getattr(client, "socket_services", None)
     if sock is None:
         return False
+    deadline = time.monotonic() + seconds
     try:
         ctx = sock.new_context()
     except Exception:
         return False
     try:
-        for option in (b"send-timeout", b"recv-timeout"):  # NNG_OPT_SENDTIMEO, NNG_OPT_RECVTIMEO
-            check_err(lib.nng_ctx_set_ms(ctx.context, option, max(1, int(seconds * 1000))))
-        ctx.send(client.preprocess_request({"method": PROBE_METHOD, "params": {}, "version": 1.0}))
+        check_err(lib.nng_ctx_set_ms(ctx.context, b"send-timeout", _ms(seconds)))  # NNG_OPT_SENDTIMEO
+        request = {"method": PROBE_METHOD, "params": {}, "version": 1.0}
+        ctx.send((encode or client.preprocess_request)(request))
+        left = _ms(deadline - time.monotonic())
+        check_err(lib.nng_ctx_set_ms(ctx.context, b"recv-timeout", left))  # NNG_OPT_RECVTIMEO
         client.postprocess_response(ctx.recv_msg())
     except Exception:
         return False
@@ -194,6 +201,11 @@ def answered_within(client: Any, seconds: float) -> bool:
         with contextlib.suppress(Exception):
             ctx.close()
     return True
+
+
+def _ms(seconds: float) -> int:
+    """NNG's duration for a timeout of `seconds`: whole milliseconds, at least one (0 would mean none)."""
+    return max(1, int(seconds * 1000))
 
 
 def _close_sockets(client: Any) -> None:

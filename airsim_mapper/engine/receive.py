@@ -18,6 +18,7 @@ __all__ = [
     "ReceiveTimeout",
     "close_client",
     "decode_body",
+    "nng_handles",
     "read_ahead",
     "receive",
     "receive_frame",
@@ -113,8 +114,11 @@ class ReceiveTimeout:
             self._set()
 
     def _set(self) -> None:
+        import pynng
+
         if self.sock is not None:
-            self.sock.recv_timeout = self.ms
+            with contextlib.suppress(pynng.exceptions.NNGException):  # closed meanwhile: the loop ends next
+                self.sock.recv_timeout = self.ms
 
 
 def receive_frame(sock: Any) -> memoryview:
@@ -124,7 +128,7 @@ def receive_frame(sock: Any) -> memoryview:
     Python bytes object). Here the view keeps the message alive and frees it when the last view of it (the
     pixels of an image being published, say) is gone. NNG's blocking receive runs without the GIL.
     """
-    ffi, lib, check_err = _nng()
+    ffi, lib, check_err = nng_handles()
     holder = ffi.new("nng_msg **")
     check_err(lib.nng_recvmsg(sock.socket, holder, 0))
     msg = holder[0]
@@ -149,7 +153,7 @@ def read_ahead(sock: Any) -> None:
 
 
 @functools.cache
-def _nng() -> tuple[Any, Any, Any]:
+def nng_handles() -> tuple[Any, Any, Any]:
     """pynng's cffi handles, imported once: a `from pynng import ...` per frame cost more than the rest of
     `receive_frame` (pynng is a package, so each such import runs importlib's Python code)."""
     from pynng import ffi, lib

@@ -122,6 +122,7 @@ class SimLink:
         self.client = client
         self.counts = counts or FrameCounts()
         self._lock = threading.RLock()
+        self._encode_lock = threading.Lock()  # the client's request numbering (`_encode`)
         self._ours: dict[str, list[TopicCallback]] = {}
         self._loop = asyncio.new_event_loop()
         self._loop_thread = threading.Thread(target=self._run_loop, name="sim-requests", daemon=True)
@@ -240,7 +241,13 @@ class SimLink:
 
     def probe(self, timeout: float) -> bool:
         """One cheap request, on the calling thread: did the server answer within `timeout` seconds?"""
-        return not self.dead and answered_within(self.client, timeout)
+        return not self.dead and answered_within(self.client, timeout, self._encode)
+
+    def _encode(self, request: dict) -> bytes:
+        """The client's bytes for `request`. The client numbers requests from a generator, which two
+        threads must not advance at once: the request loop and the health probe both encode here."""
+        with self._encode_lock:
+            return self.client.preprocess_request(request)
 
     def mark_dead(self) -> None:
         """From now on every call fails at once; subscriptions are only remembered."""
@@ -327,8 +334,7 @@ class SimLink:
             raise SimLinkError(f"{method}: no reply within {timeout:.3g} s") from exc
 
     async def _request(self, method: str, params: dict) -> Any:
-        request = {"method": method, "params": params, "version": 1.0}
-        packed = self.client.preprocess_request(request)
+        packed = self._encode({"method": method, "params": params, "version": 1.0})
         socket = self.client.socket_services
         if socket is None:
             raise SimLinkError(f"{method}: not connected to the simulator")

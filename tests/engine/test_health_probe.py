@@ -49,3 +49,27 @@ def test_the_probe_is_answered_or_given_up_within_its_timeout(tmp_path, answers)
 def test_a_client_without_a_services_socket_is_not_answered():
     client = ProjectAirSimClient("127.0.0.1", 0, 0)
     assert answered_within(client, 0.1) is False
+
+
+def test_the_probe_encodes_with_the_encoder_it_is_given(tmp_path):
+    """A link passes its own encoder, which numbers requests under its lock (SimLink._encode)."""
+    address, encoded = f"ipc://{tmp_path}/services", []
+    with pynng.Rep0(listen=address, recv_timeout=5000) as server:
+        client = client_of(address)
+
+        def encode(request: dict) -> bytes:
+            encoded.append(request["method"])
+            return client.preprocess_request(request)
+
+        def serve() -> None:
+            request = decode_request(server.recv())
+            server.send(encode_result(request.id, "hash"))
+
+        thread = threading.Thread(target=serve, daemon=True)
+        thread.start()
+        try:
+            assert answered_within(client, 2.0, encode) is True
+            assert encoded == [PROBE_METHOD]
+        finally:
+            thread.join(5)
+            client.socket_services.close()

@@ -16,8 +16,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
+from airsim_mapper.cli.node import WAITING_FOR_SCENE
 from tools.bench import scenes
 from tools.bench.baselines import RAW_TOPIC
+from tools.bench.probe import DEFAULT_MALLOC
 from tools.bench.sampling import (
     QUIET_STOLEN_SHARE,
     cpu_share,
@@ -31,7 +33,6 @@ from tools.rig import Child, Rig, free_port, port_open, wait_until
 
 FIRST_MESSAGE_TIMEOUT_S = 120.0
 APART_MARGIN_S = 5.0  # how long a second probe's window outlasts the first's: the first's start-up
-WAITING_LINE = "no --scene: waiting for a scene"  # the node's log line once it waits (cli/node.py)
 
 
 T = TypeVar("T")
@@ -80,7 +81,7 @@ class Session:
     role: str = "bridge"  # the node's name in the results: bridge, or forwarder (the floor)
 
     def probe(
-        self, label: str, topics: Sequence[str], apart: Sequence[str] = (), malloc: str = "fixed"
+        self, label: str, topics: Sequence[str], apart: Sequence[str] = (), malloc: str = DEFAULT_MALLOC
     ) -> dict[str, Any]:
         """Rate and latency of `topics`, with the CPU (cores) and RSS of the node and server meanwhile;
         `apart` topics are read by a second probe process at the same time (see `Bench.measure`), each
@@ -121,7 +122,7 @@ class Bench:
         topics: Sequence[str],
         watched: dict[str, Child],
         apart: Sequence[str] = (),
-        malloc: str = "fixed",
+        malloc: str = DEFAULT_MALLOC,
     ) -> dict[str, Any]:
         """The probe's result for `topics`, with the `apart` topics (images, say) read by a second probe
         process whose window spans the first's, their figures merged in: a subscriber of `topics` that
@@ -229,13 +230,10 @@ class Bench:
         """The node started without a scene, connected to a replay server and waiting for one: its CPU
         (from its threads' schedstat, `sampling.threads_cpu_s`) and RSS over a window in which nothing
         arrives and nothing is published."""
-        server, topics_port, services_port = self._replay_server("WARNING")
-        node: Child | None = None
-        try:
-            wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
-            ports = ["--topicsport", str(topics_port), "--servicesport", str(services_port)]
-            node = self.module("waiting_bridge", "tools.bench.node", *ports, "--nodename", "bench_waiting")
-            wait_until(lambda: WAITING_LINE in node.output(), FIRST_MESSAGE_TIMEOUT_S, "the node to wait")
+        args = ["--nodename", "bench_waiting"]
+        with self._replay_client("waiting_bridge", "tools.bench.node", None, "bridge", args) as session:
+            node = session.node
+            wait_until(lambda: WAITING_FOR_SCENE in node.output(), FIRST_MESSAGE_TIMEOUT_S, "the node")
             time.sleep(self.warmup_s)
             start, cpu_s, host_before = time.monotonic(), threads_cpu_s(node.pid), host_sample()
             time.sleep(self.duration_s)
@@ -246,10 +244,6 @@ class Bench:
                 "bridge_rss_mb": sample(node.pid).rss_mb,
                 "host_stolen_share": stolen_share(host_before, host_sample()),
             }
-        finally:
-            if node is not None:
-                self.procs.stop(node)
-            self.procs.stop(server)
 
     @contextlib.contextmanager
     def forwarder_session(self, scene_file: str, camera: bool = False) -> Iterator[Session]:
@@ -272,15 +266,16 @@ class Bench:
 
     @contextlib.contextmanager
     def _replay_client(
-        self, name: str, module: str, scene_file: str, role: str, args: Sequence[str]
+        self, name: str, module: str, scene_file: str | None, role: str, args: Sequence[str]
     ) -> Iterator[Session]:
-        """`module` run as `name` against a fresh replay server on `scene_file`, both stopped afterwards."""
+        """`module` run as `name` against a fresh replay server on `scene_file` (None: no scene given),
+        both stopped afterwards."""
         server, topics_port, services_port = self._replay_server("WARNING")
         client: Child | None = None
         try:
             wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
             ports = ["--topicsport", str(topics_port), "--servicesport", str(services_port)]
-            scene = ["--simconfigpath", str(self.config_dir), "--scene", scene_file]
+            scene = ["--simconfigpath", str(self.config_dir), "--scene", scene_file] if scene_file else []
             client = self.module(name, module, *ports, *scene, *args)
             yield Session(self, server, client, role=role)
         finally:

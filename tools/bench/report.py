@@ -133,10 +133,10 @@ def e2e_table(e2e: dict[str, Any]) -> str:
     add("bridge lidar 100k @20", e2e["bridge"]["lidar"], "bridge")
     add("  (msgpack decoding, as the bare client)", e2e["bridge"]["lidar_client_path"], "bridge")
     add("bridge pose @100, idle", e2e["pose"]["idle"], "bridge")
-    if "waiting" in e2e["pose"]:
-        rows.append(waiting_row(e2e["pose"]["waiting"]))
     if "idle_without_camera_frames" in e2e["pose"]:
         add("  (mapping without the camera frames)", e2e["pose"]["idle_without_camera_frames"], "bridge")
+    if "waiting" in e2e["pose"]:
+        rows.append(waiting_row(e2e["pose"]["waiting"]))
     add("bridge pose @100, 1080p camera @30", e2e["bridge"]["camera"], "bridge", camera_topics[1])
     apart = e2e["bridge"].get("camera_apart")
     for name in apart["topics"] if apart else ():

@@ -25,7 +25,7 @@ from typing import Any
 from tools.bench import scenes
 from tools.bench.e2e import Bench, rotated
 from tools.bench.pose_path import PREVIOUS
-from tools.bench.probe import MALLOC_CHOICES
+from tools.bench.probe import DEFAULT_MALLOC, MALLOC_CHOICES
 from tools.bench.report import _table
 
 VARIANTS: dict[str, tuple[str, ...]] = {
@@ -78,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
                 ("--mapping", str(previous), "--malloc", "glibc", "--receive", "copy")
             ),
         }
-    probes: tuple[str, ...] = ("fixed",)
+    probes: tuple[str, ...] = (DEFAULT_MALLOC,)
     if args.probe_malloc:
         variants, probes = {"bridge": ()}, MALLOC_CHOICES
 

@@ -64,6 +64,7 @@ def test_the_probe_reads_large_images_without_faulting_their_buffers_in(launcher
     images = result["topics"][RAW_TOPIC]["count"]
     assert images > 10, result
     assert result["probe_malloc"] == "fixed", result
+    assert result["probe_cpu_cores"] > 0  # its own CPU in the window: what pose only's ratio is taken over
     assert result["probe_minor_faults"] / images < MAX_FAULTS_PER_IMAGE, result
 
 
