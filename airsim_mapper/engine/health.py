@@ -109,18 +109,20 @@ def open_client(
     import pynng
     from projectairsim import ProjectAirSimClient
 
+    from airsim_mapper.engine.receive import close_client
+
     ports = (topicsport, servicesport)
     client = ProjectAirSimClient(address, topicsport, servicesport)
     try:
         client.connect()
     except pynng.exceptions.Timeout:  # connected, but NNG's handshake never came
-        _close_sockets(client)
+        close_client(client)
         raise _silent(address, ports, first_answer) from None
     except Exception as exc:
-        _close_sockets(client)
+        close_client(client)
         raise SimUnreachable(address, *ports, unreachable_reason(address, ports, exc)) from None
     if not answered_within(client, first_answer):
-        _close_sockets(client)
+        close_client(client)
         raise _silent(address, ports, first_answer)
     return client
 
@@ -206,14 +208,6 @@ def answered_within(client: Any, seconds: float, encode: Callable[[dict], bytes]
 def _ms(seconds: float) -> int:
     """NNG's duration for a timeout of `seconds`: whole milliseconds, at least one (0 would mean none)."""
     return max(1, int(seconds * 1000))
-
-
-def _close_sockets(client: Any) -> None:
-    client.state = False
-    for sock in (client.socket_topics, client.socket_services):
-        if sock is not None:
-            with contextlib.suppress(Exception):
-                sock.close()
 
 
 @dataclass

@@ -97,7 +97,10 @@ class ReceiveTimeout:
     a busy loop is unaffected; `close_client` closes the socket, which ends the wait at once."""
 
     def __init__(self, sock: Any | None) -> None:
+        import pynng
+
         self.sock = sock  # None: not a pynng socket, nothing to set
+        self._closed = pynng.exceptions.NNGException  # what setting the option on a closed socket raises
         self.ms = RECV_TIMEOUT_MS
         self._set()
 
@@ -114,10 +117,8 @@ class ReceiveTimeout:
             self._set()
 
     def _set(self) -> None:
-        import pynng
-
         if self.sock is not None:
-            with contextlib.suppress(pynng.exceptions.NNGException):  # closed meanwhile: the loop ends next
+            with contextlib.suppress(self._closed):  # closed meanwhile: the loop ends next
                 self.sock.recv_timeout = self.ms
 
 

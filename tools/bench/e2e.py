@@ -129,7 +129,11 @@ class Bench:
         does not also hold the GIL to read large messages, as in a ROS graph where each node reads its own.
         A window in which a hypervisor took QUIET_STOLEN_SHARE of the CPU time or more is measured again,
         up to `retakes` times (`quietest`)."""
-        result = quietest(lambda: self._measure_once(label, topics, watched, apart, malloc), self.retakes)
+        return self._quiet_window(lambda: self._measure_once(label, topics, watched, apart, malloc))
+
+    def _quiet_window(self, measure: Callable[[], dict[str, Any]]) -> dict[str, Any]:
+        """`measure`'s quietest window (`quietest`), counted in `windows` and `windows_retaken`."""
+        result = quietest(measure, self.retakes)
         self.windows += 1
         self.windows_retaken += result["windows_measured"] > 1
         return result
@@ -229,21 +233,25 @@ class Bench:
     def waiting_node(self) -> dict[str, Any]:
         """The node started without a scene, connected to a replay server and waiting for one: its CPU
         (from its threads' schedstat, `sampling.threads_cpu_s`) and RSS over a window in which nothing
-        arrives and nothing is published."""
+        arrives and nothing is published; a window that was not quiet is measured again, as any other."""
         args = ["--nodename", "bench_waiting"]
         with self._replay_client("waiting_bridge", "tools.bench.node", None, "bridge", args) as session:
             node = session.node
             wait_until(lambda: WAITING_FOR_SCENE in node.output(), FIRST_MESSAGE_TIMEOUT_S, "the node")
             time.sleep(self.warmup_s)
-            start, cpu_s, host_before = time.monotonic(), threads_cpu_s(node.pid), host_sample()
-            time.sleep(self.duration_s)
-            seconds, cpu_s = time.monotonic() - start, threads_cpu_s(node.pid) - cpu_s
-            return {
-                "seconds": seconds,
-                "bridge_cpu_cores": cpu_s / seconds,
-                "bridge_rss_mb": sample(node.pid).rss_mb,
-                "host_stolen_share": stolen_share(host_before, host_sample()),
-            }
+
+            def window() -> dict[str, Any]:
+                start, cpu_s, host_before = time.monotonic(), threads_cpu_s(node.pid), host_sample()
+                time.sleep(self.duration_s)
+                seconds, cpu_s = time.monotonic() - start, threads_cpu_s(node.pid) - cpu_s
+                return {
+                    "seconds": seconds,
+                    "bridge_cpu_cores": cpu_s / seconds,
+                    "bridge_rss_mb": sample(node.pid).rss_mb,
+                    "host_stolen_share": stolen_share(host_before, host_sample()),
+                }
+
+            return self._quiet_window(window)
 
     @contextlib.contextmanager
     def forwarder_session(self, scene_file: str, camera: bool = False) -> Iterator[Session]:

@@ -35,7 +35,7 @@ import numpy as np
 from airsim_mapper import tuning
 
 MALLOC_CHOICES = ("fixed", "glibc")  # the probe's malloc thresholds: as the bridge's, or glibc's adaptive
-DEFAULT_MALLOC = MALLOC_CHOICES[0]
+DEFAULT_MALLOC, GLIBC_MALLOC = MALLOC_CHOICES
 HEADER = struct.Struct("<III")
 SOCKET_BUFFER = 1 << 24
 
@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--malloc", choices=MALLOC_CHOICES, default=DEFAULT_MALLOC)
     args = parser.parse_args(rospy.myargv(argv)[1:] if argv is None else argv)
     # what the thresholds are: glibc's when asked, or when tuning is off (AIRSIM_MAPPER_NO_TUNING)
-    malloc = DEFAULT_MALLOC if args.malloc == DEFAULT_MALLOC and tuning.keep_frame_buffers() else "glibc"
+    malloc = DEFAULT_MALLOC if args.malloc == DEFAULT_MALLOC and tuning.keep_frame_buffers() else GLIBC_MALLOC
     rospy.init_node("bench_probe", anonymous=True, disable_signals=True)
     records = {topic: TopicRecord() for topic in args.topics}
     lock = threading.Lock()
