@@ -100,7 +100,7 @@ class ReceiveTimeout:
         import pynng
 
         self.sock = sock  # None: not a pynng socket, nothing to set
-        self._closed = pynng.exceptions.NNGException  # what setting the option on a closed socket raises
+        self._closed = pynng.exceptions.NNGException  # any pynng error: a closed socket's among them
         self.ms = RECV_TIMEOUT_MS
         self._set()
 
