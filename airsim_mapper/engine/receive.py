@@ -100,7 +100,7 @@ class ReceiveTimeout:
         import pynng
 
         self.sock = sock  # None: not a pynng socket, nothing to set
-        self._closed = pynng.exceptions.NNGException  # any pynng error: a closed socket's among them
+        self._nng_error = pynng.exceptions.NNGException  # any pynng error, a closed socket's too
         self.ms = RECV_TIMEOUT_MS
         self._set()
 
@@ -118,7 +118,7 @@ class ReceiveTimeout:
 
     def _set(self) -> None:
         if self.sock is not None:
-            with contextlib.suppress(self._closed):  # closed meanwhile: the loop ends next
+            with contextlib.suppress(self._nng_error):  # closed meanwhile: the loop ends next
                 self.sock.recv_timeout = self.ms
 
 
