@@ -38,6 +38,7 @@ LAYERS: tuple[tuple[tuple[str, ...], ...], ...] = (
             "airsim_mapper.geometry",
             "airsim_mapper.image_types",
             "airsim_mapper.logs",
+            "airsim_mapper.nng_wait",
             "airsim_mapper.ports",
             "airsim_mapper.resources",
             "airsim_mapper.ros_types",

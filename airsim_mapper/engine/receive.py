@@ -13,9 +13,10 @@ from typing import Any
 
 from airsim_mapper.engine.fast_frames import Buffer, decode_map
 from airsim_mapper.logs import ros_logger
+from airsim_mapper.nng_wait import MessageWait
 
 __all__ = [
-    "ReceiveTimeout",
+    "FrameWait",
     "close_client",
     "decode_body",
     "nng_handles",
@@ -33,8 +34,7 @@ CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames a
 TAKE_OVER_WAIT_S = 1.0
 CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
 READ_AHEAD_FRAMES = 16  # frames NNG may read off the topics socket before the receive loop takes them
-RECV_TIMEOUT_MS = 100  # the loop's receive timeout while frames arrive, as the client's own loop has it
-IDLE_RECV_TIMEOUT_MS = 1000  # the longest, reached by doubling while no frame arrives
+WAIT_MS = 100  # the loop's wait for a frame before it looks again whether its client stopped (the client's)
 
 
 def decode_body(body: Buffer, fast: bool) -> tuple[Any, bool]:
@@ -63,67 +63,48 @@ def receive(client: Any) -> None:
 
     Each frame goes to the client's current link (`SimLink.dispatch`): a malformed frame or a failing
     callback is dropped and counted there, and the loop goes on. NNG reads ahead of the loop from its start
-    (`read_ahead`), whichever thread runs it.
+    (`read_ahead`), whichever thread runs it. On a pynng socket the loop waits for frames in `FrameWait`.
     """
     import pynng
 
     sock = client.socket_topics
     read_ahead(sock)
-    nng = isinstance(sock, pynng.Socket)
-    read = functools.partial(receive_frame, sock) if nng else sock.recv
-    timeout = ReceiveTimeout(sock if nng else None)
+    try:
+        read = FrameWait(sock) if isinstance(sock, pynng.Socket) else sock.recv
+    except pynng.exceptions.Closed:
+        return
     while client.state:
         try:
             packed = read()
         except (pynng.exceptions.Timeout, pynng.exceptions.TryAgain):
-            timeout.idle()
             continue
         except pynng.exceptions.Closed:
             return
         except pynng.exceptions.NNGException as exc:
             getattr(client, CURRENT_LINK)._bad_frame(f"receive failed: {exc}")
             continue
-        timeout.busy()
-        getattr(client, CURRENT_LINK).dispatch(packed)
+        if packed is not None:
+            getattr(client, CURRENT_LINK).dispatch(packed)
 
 
-class ReceiveTimeout:
-    """The receive loop's timeout on a pynng topics socket: RECV_TIMEOUT_MS while frames arrive, doubled
-    at each expiry while none does, up to IDLE_RECV_TIMEOUT_MS.
+class FrameWait:
+    """The next frame on a pynng socket, or None after WAIT_MS without one: the loop then looks whether its
+    client stopped (`state`), as the client's own loop does at its receive timeout. The wait is in the
+    kernel (`MessageWait`) and the frame is then taken without blocking."""
 
-    The loop wakes at each expiry only to see whether the client stopped (`state`), and each expiry costs
-    NNG's timer and worker threads far more CPU than the wake itself: at 100 ms they were most of what a
-    node waiting for a scene used (docs/performance.md). While frames arrive the timer never expires, so
-    a busy loop is unaffected; `close_client` closes the socket, which ends the wait at once."""
+    def __init__(self, sock: Any) -> None:
+        self.sock = sock
+        self.ready = MessageWait(sock)
 
-    def __init__(self, sock: Any | None) -> None:
-        import pynng
-
-        self.sock = sock  # None: not a pynng socket, nothing to set
-        self._nng_error = pynng.exceptions.NNGException  # any pynng error, a closed socket's too
-        self.ms = RECV_TIMEOUT_MS
-        self._set()
-
-    def idle(self) -> None:
-        """The wait expired without a frame: wait longer next time."""
-        if self.ms < IDLE_RECV_TIMEOUT_MS:
-            self.ms = min(2 * self.ms, IDLE_RECV_TIMEOUT_MS)
-            self._set()
-
-    def busy(self) -> None:
-        """A frame arrived: back to the short wait."""
-        if self.ms != RECV_TIMEOUT_MS:
-            self.ms = RECV_TIMEOUT_MS
-            self._set()
-
-    def _set(self) -> None:
-        if self.sock is not None:
-            with contextlib.suppress(self._nng_error):  # closed meanwhile: the loop ends next
-                self.sock.recv_timeout = self.ms
+    def __call__(self) -> memoryview | None:
+        if not self.ready(WAIT_MS):
+            return None
+        return receive_frame(self.sock, block=False)
 
 
-def receive_frame(sock: Any) -> memoryview:
-    """The next frame on a pynng socket, as a view of NNG's own message: not copied.
+def receive_frame(sock: Any, block: bool = True) -> memoryview:
+    """The next frame on a pynng socket, as a view of NNG's own message: not copied. Without `block`, pynng's
+    TryAgain when NNG holds no frame.
 
     `Socket.recv` copies each frame twice (NNG's message into a buffer it allocates, that buffer into a
     Python bytes object). Here the view keeps the message alive and frees it when the last view of it (the
@@ -131,7 +112,7 @@ def receive_frame(sock: Any) -> memoryview:
     """
     ffi, lib, check_err = nng_handles()
     holder = ffi.new("nng_msg **")
-    check_err(lib.nng_recvmsg(sock.socket, holder, 0))
+    check_err(lib.nng_recvmsg(sock.socket, holder, 0 if block else lib.NNG_FLAG_NONBLOCK))
     msg = holder[0]
     body = ffi.gc(lib.nng_msg_body(msg), lambda _body: lib.nng_msg_free(msg))
     return memoryview(ffi.buffer(body, lib.nng_msg_len(msg)))
@@ -205,7 +186,7 @@ def unknown_topic(topic: str) -> Any:
 
 def close_client(client: Any) -> None:
     """Close a client's sockets at once, without talking to the server; joins its receive thread."""
-    client.state = False  # the receive loop ends at its next frame or timeout ...
+    client.state = False  # the receive loop ends at its next frame or wait ...
     _close(getattr(client, "socket_topics", None))  # ... or at once, on the closed socket
     thread = getattr(client, "recv_topic_thread", None)
     if thread is not None and thread.is_alive() and thread is not threading.current_thread():

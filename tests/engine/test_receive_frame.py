@@ -1,5 +1,6 @@
 """The receive loop reads each frame as a view of NNG's message: same bytes, kept alive by its views; it
-waits longer while nothing arrives, and stops at once when its client is closed."""
+waits for frames in the kernel, sees a stopped client within its wait, and stops at once when its client is
+closed."""
 
 from __future__ import annotations
 
@@ -10,13 +11,13 @@ import types
 
 import msgpack
 import pynng
+import pytest
 
+from airsim_mapper.engine import receive
 from airsim_mapper.engine.fast_frames import parse_frame_header
 from airsim_mapper.engine.receive import (
-    IDLE_RECV_TIMEOUT_MS,
     READ_AHEAD_FRAMES,
-    RECV_TIMEOUT_MS,
-    ReceiveTimeout,
+    FrameWait,
     close_client,
     decode_body,
     read_ahead,
@@ -74,28 +75,6 @@ def test_nng_reads_frames_ahead_of_the_links_receive_loop_in_order(tmp_path):
     read_ahead(types.SimpleNamespace())  # not a pynng socket: nothing to set, no error
 
 
-class TimeoutSocket:
-    def __init__(self) -> None:
-        self.recv_timeout = 0
-        self.set: list[int] = []
-
-    def __setattr__(self, name: str, value) -> None:
-        if name == "recv_timeout" and hasattr(self, "set"):
-            self.set.append(value)
-        object.__setattr__(self, name, value)
-
-
-def test_the_receive_timeout_doubles_while_nothing_arrives_and_is_short_again_at_the_first_frame():
-    sock = TimeoutSocket()
-    timeout = ReceiveTimeout(sock)
-    for _ in range(6):
-        timeout.idle()
-    assert sock.set == [RECV_TIMEOUT_MS, 200, 400, 800, IDLE_RECV_TIMEOUT_MS]
-    timeout.busy()
-    timeout.busy()  # already short: the option is not set again on every frame
-    assert sock.set[-1] == RECV_TIMEOUT_MS and len(sock.set) == 6 and sock.recv_timeout == RECV_TIMEOUT_MS
-
-
 def idle_client(sock: pynng.Socket) -> tuple[types.SimpleNamespace, SimLink]:
     client = types.SimpleNamespace(
         socket_topics=sock, socket_services=None, recv_topic_thread=None, state=True, topics={}, subs={}
@@ -103,40 +82,54 @@ def idle_client(sock: pynng.Socket) -> tuple[types.SimpleNamespace, SimLink]:
     return client, SimLink(client)
 
 
-def test_an_idle_loop_waits_longer_and_still_takes_the_next_frame_at_once(tmp_path):
+def test_the_wait_for_a_frame_ends_empty_after_its_time_and_at_once_with_a_frame(tmp_path, monkeypatch):
+    monkeypatch.setattr(receive, "WAIT_MS", 20)
+    address = f"ipc://{tmp_path}/wait"
+    with pynng.Pair0(listen=address, send_timeout=5000) as server, pynng.Pair0(dial=address) as sock:
+        wait = FrameWait(sock)
+        start = time.monotonic()
+        assert wait() is None and time.monotonic() - start >= 0.015
+        server.send(b"frame")
+        deadline = time.monotonic() + 5
+        while (frame := wait()) is None and time.monotonic() < deadline:
+            pass
+        assert bytes(frame) == b"frame"
+        assert sock.recv_timeout == -1  # NNG's own timer is not used: the socket's option is left alone
+    with pytest.raises(pynng.exceptions.TryAgain), pynng.Pair0(listen=f"ipc://{tmp_path}/empty") as sock:
+        receive_frame(sock, block=False)
+
+
+def test_an_idle_loop_takes_the_next_frame(tmp_path):
     address, got = f"ipc://{tmp_path}/idle", threading.Event()
     with pynng.Pair0(listen=address, send_timeout=5000) as server, pynng.Pair0(dial=address) as sock:
         client, link = idle_client(sock)
         client.subs["/idle"] = {"callbacks": [lambda _info, _message: got.set()]}
         try:
-            deadline = time.monotonic() + 5
-            while sock.recv_timeout < IDLE_RECV_TIMEOUT_MS and time.monotonic() < deadline:
-                time.sleep(0.05)
-            assert sock.recv_timeout == IDLE_RECV_TIMEOUT_MS  # 100 + 200 + 400 + 800 ms without a frame
+            time.sleep(1.5)  # many waits without a frame
             server.send(encode_frame("/idle", msgpack.packb({"n": 1})))
             assert got.wait(5)
-            assert sock.recv_timeout == RECV_TIMEOUT_MS
         finally:
             client.state = False
             link.stop_loop()
 
 
-def test_close_client_ends_a_loop_in_its_longest_wait_at_once_and_a_stopped_client_within_it(tmp_path):
+def test_close_client_ends_a_waiting_loop_at_once_and_a_stopped_client_within_its_wait(tmp_path, monkeypatch):
     for close in (True, False):
         with pynng.Pair0(listen=f"ipc://{tmp_path}/close{close}") as _server:
             sock = pynng.Pair0(dial=f"ipc://{tmp_path}/close{close}")
+            # closing: a wait far longer than the test, which only the closed socket can end
+            monkeypatch.setattr(receive, "WAIT_MS", 60_000 if close else 100)
             client, link = idle_client(sock)
-            deadline = time.monotonic() + 5
-            while sock.recv_timeout < IDLE_RECV_TIMEOUT_MS and time.monotonic() < deadline:
-                time.sleep(0.05)
+            time.sleep(1.5)  # idle: the loop is waiting for a frame
             start = time.monotonic()
             if close:  # the node's shutdown, and a lost simulator
                 close_client(client)
                 assert not client.recv_topic_thread.is_alive()
-                assert time.monotonic() - start < IDLE_RECV_TIMEOUT_MS / 2000  # not a timeout's wait
-            else:  # the client's own disconnect(): stop, then join
+                assert time.monotonic() - start < 5  # not the wait's 60 s
+            else:  # the client's own disconnect(): stop, then join, as a mission script does
                 client.state = False
-                client.recv_topic_thread.join(IDLE_RECV_TIMEOUT_MS / 1000 + 1)
+                client.recv_topic_thread.join(5)
                 assert not client.recv_topic_thread.is_alive()
+                assert time.monotonic() - start < 0.6  # within one wait (100 ms), with room for a busy host
                 sock.close()
             link.stop_loop()

@@ -94,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     if decode == "client":
         receive.FAST_MIN_BYTES = sys.maxsize  # the baseline: no frame is large enough for the fast path
     if _option(args, "--receive", "view") == "copy":  # comparison: pynng's own recv, which copies twice
-        receive.receive_frame = lambda sock: sock.recv()
+        receive.receive_frame = lambda sock, block=True: sock.recv(block=block)
     if _option(args, "--malloc", "fixed") == "glibc":  # comparison: glibc's adaptive malloc thresholds
         wrapper.keep_frame_buffers = lambda: False
     profiles = profile_all_threads() if profile_path else []
