@@ -21,12 +21,14 @@ from typing import Any
 
 import pynng
 
+from airsim_mapper.nng_wait import MessageWait
 from airsim_mapper.simserver import protocol
 from airsim_mapper.simserver.outbox import Outbox
 
 LOG = logging.getLogger("airsim_mapper.simserver.topics")
 
 TOPICS_PATH = "/$topics"
+RECV_WAIT_MS = 100  # the receive loop's wait for a client's frame before it sees whether the hub stops
 PUBLISHED = "published"
 SUBSCRIBED = "subscribed"
 
@@ -65,7 +67,7 @@ class TopicHub:
 
     def __init__(self, address: str, port: int, send_timeout_ms: int = 250) -> None:
         self.url = f"tcp://{address}:{port}"
-        self._socket = pynng.Pair0(listen=self.url, recv_timeout=100, send_timeout=send_timeout_ms)
+        self._socket = pynng.Pair0(listen=self.url, send_timeout=send_timeout_ms)
         self._socket.add_post_pipe_connect_cb(self._on_pipe_connected)
         self._socket.add_post_pipe_remove_cb(self._on_pipe_removed)
         self._pipes: set[int] = set()
@@ -180,10 +182,16 @@ class TopicHub:
     # -- receiving
 
     def _recv_loop(self) -> None:
+        try:
+            ready = MessageWait(self._socket)
+        except pynng.Closed:
+            return
         while not self._stopping.is_set():
+            if not ready(RECV_WAIT_MS):  # then sees whether the hub stops
+                continue
             try:
-                raw = self._socket.recv()
-            except pynng.Timeout:
+                raw = self._socket.recv(block=False)
+            except pynng.TryAgain:
                 continue
             except pynng.Closed:
                 return

@@ -3,6 +3,9 @@ gets the newest one."""
 
 from __future__ import annotations
 
+import time
+
+import pynng
 import pytest
 from harness import free_port
 
@@ -76,3 +79,18 @@ def test_a_maker_that_fails_on_subscribe_is_logged_and_the_subscription_stands(h
 
 def test_unknown_topics_are_refused(hub):
     assert hub.offer("/nope", Maker(1)) is False and hub.cached("/nope") is None
+
+
+def test_an_idle_hub_takes_a_clients_subscription_and_stops_within_its_wait(hub):
+    """The hub's receive loop waits for client frames in the kernel (`MessageWait`), not on NNG's timer."""
+    with pynng.Pair0(dial=hub.url, send_timeout=5000) as client:
+        time.sleep(1.0)  # ten waits without a frame
+        client.send(protocol.encode_frame(PATH, b"", protocol.FrameType.SUBSCRIBE))
+        deadline = time.monotonic() + 5
+        while not hub.is_subscribed(PATH) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert hub.is_subscribed(PATH)
+    assert hub._socket.recv_timeout == -1  # no NNG receive timer
+    start = time.monotonic()
+    hub.stop()
+    assert not hub._thread.is_alive() and time.monotonic() - start < 1.5  # one 100 ms wait, a busy host
