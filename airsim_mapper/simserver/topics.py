@@ -187,9 +187,9 @@ class TopicHub:
         except pynng.Closed:
             return
         while not self._stopping.is_set():
-            if not ready(RECV_WAIT_MS):  # then sees whether the hub stops
-                continue
             try:
+                if not ready(RECV_WAIT_MS):  # then sees whether the hub stops
+                    continue
                 raw = self._socket.recv(block=False)
             except pynng.TryAgain:
                 continue
