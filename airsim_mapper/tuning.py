@@ -1,7 +1,7 @@
 """Thread settings shared by the bridge and the headless server: one BLAS thread, a short GIL interval.
 
 `tune_threads()` applies both unless `AIRSIM_MAPPER_NO_TUNING` is set (for side-by-side comparisons in
-the soak). The bridge adds a rospy setting on top (`engine/realtime.py`).
+the soak). The bridge adds a rospy setting on top (`engine/process_tuning.py`).
 
 One BLAS thread: numpy's OpenBLAS otherwise spins its idle workers on `sched_yield`.
 

@@ -24,11 +24,18 @@ from typing import Any
 
 import rospy
 
-from airsim_mapper.engine.diagnostics import Diagnostics
-from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S, Engine
-from airsim_mapper.engine.health import open_client
-from airsim_mapper.engine.reregister import MasterWatch
-from airsim_mapper.engine.sim_link import MAX_FRAME_MB, FrameCounts, close_client
+from airsim_mapper.engine import (
+    MAX_FRAME_MB,
+    SHUTDOWN_TIMEOUT_S,
+    Diagnostics,
+    Engine,
+    FrameCounts,
+    MasterWatch,
+    NodeNames,
+    SimAccess,
+    close_client,
+    open_client,
+)
 from airsim_mapper.errors import AirsimMapperError
 from airsim_mapper.logs import caller_logger, ros_logger, wait_for_rosout
 from airsim_mapper.mapping.diff import BridgeDiff
@@ -77,7 +84,7 @@ class ProjectAirSimWrapper:
     it limits numpy's OpenBLAS to one thread, lowers the interpreter's switch interval to 0.5 ms, makes
     every rospy publisher of the process send on the publishing thread when the socket takes the message
     at once, watches rospy's connections without an open file per topic, and freezes the heap after each
-    scene change (`gc.freeze`); engine/realtime.py explains why.
+    scene change (`gc.freeze`); engine/process_tuning.py explains why.
     """
 
     def __init__(
@@ -118,14 +125,12 @@ class ProjectAirSimWrapper:
         self.engine = Engine(
             client,
             self.mapping,
-            self.sim_config_path,
-            name,
-            namespace,
-            client_factory=client_factory,
-            tune=tune_process,
+            NodeNames(name, namespace, ros_name),
+            SimAccess(self.sim_config_path, client_factory=client_factory),
             frame_counts=FrameCounts(max_frame_bytes=int(max_frame_mb * 1024 * 1024)),
-            ros_name=ros_name,
+            tune=tune_process,
         )
+        self.engine.start()
         self.master_watch = MasterWatch()
         self.diagnostics = Diagnostics(self.engine, ros_name)
         self._closed = False

@@ -217,7 +217,7 @@ class EngineRig:
     """An engine whose every simulator link and world load is recorded."""
 
     def __init__(self, reconnect: bool = True, mapping: Any = None, ros_name: str | None = None) -> None:
-        from airsim_mapper.engine.engine import Engine
+        from airsim_mapper.engine import Engine, NodeNames, SimAccess
         from airsim_mapper.mapping.loader import load_mapping
 
         self.links: list[FakeSimLink] = []
@@ -226,14 +226,16 @@ class EngineRig:
         self.engine = Engine(
             fake_client(),
             mapping or load_mapping("default"),
-            SIM_CONFIG,
-            "node",
-            load_world=self._load_world,
-            client_factory=fake_client if reconnect else None,
+            NodeNames("node", ros=ros_name or ""),
+            SimAccess(
+                SIM_CONFIG,
+                load_world=self._load_world,
+                client_factory=fake_client if reconnect else None,
+                link=self._link,
+            ),
             ros=self.ros,
-            link=self._link,
-            ros_name=ros_name,
         )
+        self.engine.start()
 
     def _link(self, client, counts) -> FakeSimLink:
         self.links.append(FakeSimLink(client, counts))

@@ -7,15 +7,16 @@ own group of it) or a lower one. Every module of the package is in exactly one l
   package, is rospy, genpy, a message package or another ROS library;
 - convert/ does not import rospy (message classes and genpy.Time only);
 - nothing in the package imports the tools;
-- the package's run-time imports (those outside `if TYPE_CHECKING:`) have no circle;
-- from outside a subpackage (cli, convert, engine, mapping), only the modules its `__all__` names are
-  imported.
+- the package's imports have no circle, those under `if TYPE_CHECKING:` included;
+- from outside a subpackage (cli, convert, engine, mapping), only what its `__all__` names is imported: its
+  modules named there, or the names it exports (the engine's classes, imported from `airsim_mapper.engine`).
 Each rule has a self-test: an import injected against it is reported.
 """
 
 from __future__ import annotations
 
 import ast
+import importlib
 import itertools
 from collections.abc import Iterable
 from functools import cache
@@ -225,8 +226,9 @@ def test_every_module_is_in_exactly_one_layer() -> None:
     assert len(prefixes) == len(set(prefixes))
 
 
-def test_the_run_time_imports_have_no_circle() -> None:
-    assert circles(package_graph(run_time_only=True)) == []
+@pytest.mark.parametrize("run_time_only", [True, False], ids=["run-time imports", "type-checking ones too"])
+def test_the_imports_have_no_circle(run_time_only: bool) -> None:
+    assert circles(package_graph(run_time_only=run_time_only)) == []
 
 
 def representative(rank: int, group: int) -> str:
@@ -269,9 +271,9 @@ def test_an_import_of_a_lower_layer_or_of_its_own_group_is_allowed() -> None:
         ),
         (
             "the package never imports the tools",
-            "airsim_mapper.engine.engine",
+            "airsim_mapper.engine.core",
             "import tools.rig",
-            "airsim_mapper.engine.engine imports tools.rig",
+            "airsim_mapper.engine.core imports tools.rig",
         ),
     ],
 )
@@ -285,7 +287,7 @@ def test_each_rule_reports_a_forbidden_import(rule: str, module: str, source: st
 
 def test_a_circle_is_reported_and_type_checking_imports_are_not_run_time_ones() -> None:
     graph = package_graph(run_time_only=True)
-    graph["airsim_mapper.engine.hub"] |= {"airsim_mapper.engine.engine"}
+    graph["airsim_mapper.engine.hub"] |= {"airsim_mapper.engine.core"}
     assert any(c.startswith("airsim_mapper.engine.") and "engine.hub" in c for c in circles(graph))
     source = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from a import b\nelse:\n    import c\n"
     assert imported(source, "m", run_time_only=True) == {"typing", "typing.TYPE_CHECKING", "c"}
@@ -296,7 +298,7 @@ FACES = ("airsim_mapper.cli", "airsim_mapper.convert", "airsim_mapper.engine", "
 
 
 def face(package: str) -> frozenset[str]:
-    """The modules a subpackage's `__init__` names in `__all__`."""
+    """What a subpackage's `__init__` names in `__all__`: its modules, or the names it exports."""
     source = (PACKAGE.parent / package.replace(".", "/") / "__init__.py").read_text(encoding="utf-8")
     for node in ast.parse(source).body:
         if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets):
@@ -326,9 +328,20 @@ def face_problems(graph: dict[str, set[str]]) -> list[str]:
 def test_each_subpackage_names_its_face_and_every_outside_import_uses_it(package: str) -> None:
     names = face(package)
     assert names, f"{package}/__init__.py has no __all__"
-    modules = {name.rsplit(".", 1)[-1] for name in parsed_package() if name.startswith(f"{package}.")}
-    assert sorted(names - modules) == [], "__all__ names modules that do not exist"
+    assert face_gaps(package, names) == [], "__all__ names what is neither a module nor exported"
     assert [p for p in face_problems(package_graph()) if f"not in {package}." in p] == []
+
+
+def face_gaps(package: str, names: frozenset[str]) -> list[str]:
+    """The names of `names` that are neither a module of `package` nor a name it exports."""
+    modules = {name.rsplit(".", 1)[-1] for name in parsed_package() if name.startswith(f"{package}.")}
+    exported = importlib.import_module(package)
+    return sorted(name for name in names - modules if not hasattr(exported, name))
+
+
+def test_a_face_naming_what_its_package_neither_holds_nor_exports_is_reported() -> None:
+    engine = "airsim_mapper.engine"
+    assert face_gaps(engine, face(engine) | {"Engine", "core", "Nowhere"}) == ["Nowhere"]
 
 
 def test_an_import_behind_a_subpackages_face_is_reported() -> None:
@@ -337,3 +350,14 @@ def test_an_import_behind_a_subpackages_face_is_reported() -> None:
     assert face_problems(graph) == [
         "airsim_mapper.wrapper imports airsim_mapper.engine.streams, not in airsim_mapper.engine.__all__"
     ]
+
+
+def test_an_exported_name_is_imported_through_its_subpackage_not_from_its_module() -> None:
+    graph = package_graph()
+    graph["airsim_mapper.wrapper"] |= imported("from airsim_mapper.engine import Engine", "m")
+    assert face_problems(graph) == []
+    graph["airsim_mapper.wrapper"] |= imported("from airsim_mapper.engine.core import Engine", "m")
+    assert (
+        "airsim_mapper.wrapper imports airsim_mapper.engine.core, not in airsim_mapper.engine.__all__"
+        in face_problems(graph)
+    )

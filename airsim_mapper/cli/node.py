@@ -59,8 +59,7 @@ WAITING_FOR_SCENE = "no --scene: waiting for a scene file name on"  # logged wit
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    from airsim_mapper.engine.engine import SHUTDOWN_TIMEOUT_S
-    from airsim_mapper.engine.sim_link import MAX_FRAME_MB
+    from airsim_mapper.engine import MAX_FRAME_MB, SHUTDOWN_TIMEOUT_S
     from airsim_mapper.resources import shipped_mappings
 
     *others, last = (f"--{switch}" for switch in SWITCHES_ONLY)
@@ -197,7 +196,7 @@ def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
     import rospy
     from std_srvs.srv import Trigger, TriggerResponse
 
-    from airsim_mapper.engine.mapping_reload import MappingReloader
+    from airsim_mapper.engine import MappingReloader
 
     reloader = MappingReloader(engine, spec, mapping)
 

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
-from airsim_mapper.engine.health import Backoff, SimSilent, SimUnreachable, open_client, retry_quietly
+from airsim_mapper.engine import Backoff, SimSilent, SimUnreachable, open_client, retry_quietly
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.logs import ros_logger
 
@@ -149,7 +149,7 @@ class StartUp:
     def _run(self) -> str:
         import rospy
 
-        from airsim_mapper.engine.status import WaitingStatus
+        from airsim_mapper.engine import WaitingStatus
         from airsim_mapper.wrapper import ProjectAirSimWrapper
 
         args, settings, prepared = self.args, self.settings, self.prepared

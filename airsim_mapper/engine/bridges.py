@@ -1,7 +1,7 @@
 """Runners for expanded bridges: each takes a BridgeSpec and wires sim link <-> converter <-> ROS link.
 
 Here: what every runner has (`Bridge`: a spec, its stats, a rate-limited warning channel, the engine's
-`Services`), the simulator -> ROS runners (`SimToRos`, `StreamingImage`) and the catalogue's after-hooks.
+`BridgeParts`), the simulator -> ROS runners (`SimToRos`, `StreamingImage`) and the catalogue's after-hooks.
 The ROS -> simulator runners are in ros_to_sim.py; runners.py's `build` picks one from the catalogue
 (`ConverterInfo.runner`, `after`, `action`), so adding a converter touches the catalogue and its own
 module, never the engine.
@@ -50,8 +50,9 @@ class BridgeStats:
 
 
 @dataclass
-class Services:
-    """What every runner needs from the engine."""
+class BridgeParts:
+    """The engine parts every runner is built from: the two links, the stream hub, the camera mounts, the
+    engine's actions and the node-wide counts."""
 
     sim: SimLink
     hub: StreamHub
@@ -79,18 +80,18 @@ class ClampCounter:
 
 
 def make_context(
-    spec: BridgeSpec, services: Services, on_clamp: Callable[[str], None] | None = None
+    spec: BridgeSpec, parts: BridgeParts, on_clamp: Callable[[str], None] | None = None
 ) -> ConvertContext:
     return ConvertContext(
         frame_id=spec.frame_id or "",
         convention=spec.convention,
         stamp=spec.options.stamp,
-        now=services.ros.now,
+        now=parts.ros.now,
         params=spec.params,
         source=spec.source,
         variables=spec.variables,
         options=spec.options,
-        mounts=services.mounts,
+        mounts=parts.mounts,
         on_clamp=on_clamp,
     )
 
@@ -98,15 +99,15 @@ def make_context(
 class Bridge:
     """Base: a spec, its stats and a throttled warning channel."""
 
-    def __init__(self, spec: BridgeSpec, services: Services) -> None:
+    def __init__(self, spec: BridgeSpec, parts: BridgeParts) -> None:
         self.spec = spec
-        self.services = services
+        self.parts = parts
         self.info = catalog.CONVERTERS[spec.converter]
         self.stats = BridgeStats()
         self.warn = RateLimitedLog(log, WARN_PERIOD_S, prefix=spec.name).warn
         # The context is told of clamps through a counter, not a method of the bridge: a bridge that refers
-        # to itself lives on after it stops, and in a frozen heap (engine/realtime.py) for good.
-        self.ctx = make_context(spec, services, ClampCounter(self.stats, self.warn))
+        # to itself lives on after it stops, and in a frozen heap (engine/process_tuning.py) for good.
+        self.ctx = make_context(spec, parts, ClampCounter(self.stats, self.warn))
 
     def after_call(self, params: dict, result: Any) -> None:
         """The catalogue's after-hook, once the simulator accepted a call (a result other than false)."""
@@ -135,8 +136,8 @@ class Bridge:
 class SimToRos(Bridge):
     """Sim topic -> converter -> ROS publisher (and/or tf). Lazy bridges follow their ROS subscribers."""
 
-    def __init__(self, spec: BridgeSpec, services: Services) -> None:
-        super().__init__(spec, services)
+    def __init__(self, spec: BridgeSpec, parts: BridgeParts) -> None:
+        super().__init__(spec, parts)
         self.convert = registry.get(spec.converter)
         self.publisher: Any = None
         self._attached = False
@@ -158,7 +159,7 @@ class SimToRos(Bridge):
     def start(self) -> None:
         spec = self.spec
         if spec.ros is not None:
-            self.publisher = self.services.ros.publisher(
+            self.publisher = self.parts.ros.publisher(
                 spec.ros,
                 spec.ros_type,
                 queue_size=spec.options.queue_size,
@@ -184,10 +185,10 @@ class SimToRos(Bridge):
             self._attached = attached
             if attached:
                 if self.lazy and self.spec.options.first_message == "fresh":
-                    self._fresh_after = self.services.hub.sim_now()
-                self.services.hub.attach(self.topic, self.handle, inline=self.info.inline)
+                    self._fresh_after = self.parts.hub.sim_now()
+                self.parts.hub.attach(self.topic, self.handle, inline=self.info.inline)
             else:
-                self.services.hub.detach(self.topic, self.handle)
+                self.parts.hub.detach(self.topic, self.handle)
 
     def handle(self, message: Any) -> list | None:
         """Convert one sim message, publish it; return the transforms it produces."""
@@ -200,7 +201,7 @@ class SimToRos(Bridge):
             out = self.convert(message, self.ctx)
         except ConversionError as exc:
             if isinstance(exc, OversizedData):
-                self.services.counts.oversized += 1
+                self.parts.counts.oversized += 1
             self.fail(f"dropped a message from {self.topic}: {exc}")
             return None
         except Exception as exc:  # the stream and the node go on
@@ -222,7 +223,7 @@ class SimToRos(Bridge):
         header = getattr(out, "header", None)
         if header is not None:
             self.stats.last_stamp = header.stamp
-        if self.spec.tf is None or not self.services.ros.tf_wanted():
+        if self.spec.tf is None or not self.parts.ros.tf_wanted():
             return None
         try:
             transform = self._transform(out, message)
@@ -264,7 +265,7 @@ class SimToRos(Bridge):
         self._set_attached(False)
         self._stopped = True
         # The publisher's peer listener is a method of this bridge: dropped, the stopped bridge is freed by
-        # reference counting (a cycle would outlive it in the frozen heap, engine/realtime.py)
+        # reference counting (a cycle would outlive it in the frozen heap, engine/process_tuning.py)
         publisher, self.publisher = self.publisher, None
         if publisher is not None:
             publisher.unregister()
@@ -277,19 +278,19 @@ def _accepted(result: Any) -> bool:
 class StreamingImage(SimToRos):
     """`/airsim_streaming_camera/image_raw`: the scene image of the active streaming camera."""
 
-    def __init__(self, spec: BridgeSpec, services: Services) -> None:
-        super().__init__(spec, services)
+    def __init__(self, spec: BridgeSpec, parts: BridgeParts) -> None:
+        super().__init__(spec, parts)
         self.cameras = list(spec.source.get("cameras", []))
         self.active = 0
         self.topic = self.cameras[0]["sim"] if self.cameras else None
 
     def start(self) -> None:
         super().start()
-        self.services.streaming.append(self)
+        self.parts.streaming.append(self)
 
     def stop(self) -> None:
-        if self in self.services.streaming:
-            self.services.streaming.remove(self)
+        if self in self.parts.streaming:
+            self.parts.streaming.remove(self)
         super().stop()
 
     def next_camera(self) -> None:
@@ -324,14 +325,14 @@ class MountTransform(Bridge):
     same convention), so map -> robot (the robot's pose) -> mount is the frame the converter gives per pose.
     """
 
-    def __init__(self, spec: BridgeSpec, services: Services) -> None:
-        super().__init__(spec, services)
+    def __init__(self, spec: BridgeSpec, parts: BridgeParts) -> None:
+        super().__init__(spec, parts)
         self.convert = registry.get(spec.converter)
         variables = spec.variables
         self.key = camera_pose_key(variables.get("robot_name"), variables.get("camera_name"))
 
     def start(self) -> None:
-        self.services.mounts.listen(self.key, self.send)
+        self.parts.mounts.listen(self.key, self.send)
         self.send()
 
     def send(self) -> None:
@@ -340,7 +341,7 @@ class MountTransform(Bridge):
         except ConversionError as exc:
             self.fail(f"no static transform for {self.spec.tf.child}: {exc}")
             return
-        self.services.ros.set_static_tf(transform)
+        self.parts.ros.set_static_tf(transform)
         self.stats.messages += 1
         self.stats.last_time = time.monotonic()
 
@@ -353,7 +354,7 @@ class MountTransform(Bridge):
         position = q_rotate(inverse, offset)
         q = q_mul(inverse, _wxyz(mount.orientation))
         t = TransformStamped()
-        t.header.stamp = self.services.ros.now()
+        t.header.stamp = self.parts.ros.now()
         t.header.frame_id, t.child_frame_id = self.spec.tf.parent, self.spec.tf.child
         translation, rotation = t.transform.translation, t.transform.rotation
         translation.x, translation.y, translation.z = position
@@ -361,8 +362,8 @@ class MountTransform(Bridge):
         return t
 
     def stop(self) -> None:
-        self.services.mounts.unlisten(self.key, self.send)
-        self.services.ros.remove_static_tf(self.spec.tf.child)
+        self.parts.mounts.unlisten(self.key, self.send)
+        self.parts.ros.remove_static_tf(self.spec.tf.child)
 
 
 def _wxyz(q: Any) -> tuple[float, float, float, float]:
@@ -375,12 +376,12 @@ def remember_camera_pose(bridge: Bridge, params: dict, _result: Any) -> None:
 
     variables = bridge.spec.variables
     key = camera_pose_key(variables.get("robot_name"), variables.get("camera_name"))
-    bridge.services.mounts.set(key, camera_pose_override(params))
+    bridge.parts.mounts.set(key, camera_pose_override(params))
 
 
 def next_streaming_camera(bridge: Bridge, _params: dict, _result: Any) -> None:
     """The simulator switched its streaming view: the streaming image follows the next camera."""
-    for streaming in bridge.services.streaming:
+    for streaming in bridge.parts.streaming:
         streaming.next_camera()
 
 

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
+from typing import Any
 
 from airsim_mapper.engine.sim_link import SimLink
 from airsim_mapper.engine.streams import Handler, Stream
@@ -81,6 +83,21 @@ class StreamHub:
     def streams(self) -> dict[str, Stream]:
         with self._lock:
             return dict(self._streams)
+
+    def statistics(self) -> dict[str, dict[str, Any]]:
+        """Every stream's counts, the age of its newest frame and its peaks since the previous call."""
+        now = time.monotonic()
+        return {
+            topic: {
+                "received": s.stats.received,
+                "dropped": s.stats.dropped,
+                "handled": s.stats.handled,
+                "errors": s.stats.errors,
+                "age_s": round(now - s.stats.last_receive, 3) if s.stats.last_receive else None,
+                **s.stats.take_peaks(),
+            }
+            for topic, s in self.streams().items()
+        }
 
     def rebind(self, sim: SimLink) -> None:
         """Move every stream to a new sim link (after a reconnect): same streams, subscribed anew."""

@@ -103,7 +103,7 @@ class MappingReloader:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        engine.mapping_report = self.report.as_dict()
+        engine.report_mapping(self.report.as_dict())
 
     def reload(self, why: str = "requested") -> Outcome:
         """Load the mapping again and apply it, or reject it; never raises for a bad mapping."""
@@ -143,7 +143,7 @@ class MappingReloader:
         return Outcome(False, "rejected; every bridge keeps running:\n" + "\n".join(errors), tuple(errors))
 
     def _publish(self) -> None:
-        self.engine.mapping_report = self.report.as_dict()
+        self.engine.report_mapping(self.report.as_dict())
         publish = getattr(self.engine, "publish_status", None)
         if publish is not None:
             publish()

@@ -4,11 +4,11 @@ rospy serialises a message into its publisher's buffer and hands that buffer to 
 the pixels are copied once more, with the GIL held. A message that can serialise itself apart
 (`serialize_apart`, the converters' Buffer* classes, `convert.buffer_data`) is handed over here in parts
 instead, its head, then the buffer from where it is and the fields after it, to connections that take parts
-(`realtime.PromptQueuedConnection`, which sends them with one `sendmsg`). The bytes on the wire are rospy's,
-byte for byte, and what rospy's publish does around them is kept: the publisher's lock, the header's sequence
-number, the topic's statistics, and a connection that fails is closed (rospy then drops it). Anything else
-(another message, a latched topic, no subscriber, a closed or unregistered topic, rospy's own connections)
-goes through rospy's publish.
+(`rospy_internals.PromptQueuedConnection`, which sends them with one `sendmsg`). The bytes on the wire are
+rospy's, byte for byte, and what rospy's publish does around them is kept: the publisher's lock, the
+header's sequence number, the topic's statistics, and a connection that fails is closed (rospy then drops
+it). Anything else (another message, a latched topic, no subscriber, a closed or unregistered topic,
+rospy's own connections) goes through rospy's publish.
 """
 
 from __future__ import annotations

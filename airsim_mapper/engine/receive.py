@@ -11,6 +11,12 @@ import threading
 import time
 from typing import Any
 
+from airsim_mapper.engine.client_internals import (
+    FRAME_READ,
+    can_replace_frame_read,
+    frame_read_replaced,
+    replace_frame_read,
+)
 from airsim_mapper.engine.fast_frames import Buffer, decode_map
 from airsim_mapper.logs import ros_logger
 from airsim_mapper.nng_wait import MessageWait
@@ -18,13 +24,13 @@ from airsim_mapper.nng_wait import MessageWait
 __all__ = [
     "FrameWait",
     "close_client",
-    "decode_body",
     "nng_handles",
     "read_ahead",
     "receive",
     "receive_frame",
     "take_over",
     "unknown_topic",
+    "unpack_message",
 ]
 
 log = ros_logger("airsim_mapper.sim")
@@ -32,12 +38,11 @@ FAST_MIN_BYTES = 32768  # smaller bodies are cheaper through msgpack
 RECEIVE_THREAD = "sim-receive"
 CURRENT_LINK = "_airsim_mapper_link"  # client attribute: the link that frames are dispatched through
 TAKE_OVER_WAIT_S = 1.0
-CLIENT_READ = "_ProjectAirSimClient__recv_topic_frame"  # the client's per-frame read (name-mangled)
 READ_AHEAD_FRAMES = 16  # frames NNG may read off the topics socket before the receive loop takes them
 WAIT_MS = 100  # the loop's wait for a frame before it looks again whether its client stopped (the client's)
 
 
-def decode_body(body: Buffer, fast: bool) -> tuple[Any, bool]:
+def unpack_message(body: Buffer, fast: bool) -> tuple[Any, bool]:
     """The message of a frame body, and whether it took the fast path.
 
     With `fast` (only the bridge listens to the topic), a large body is decoded with its float/int arrays
@@ -147,17 +152,17 @@ def nng_handles() -> tuple[Any, Any, Any]:
 def take_over(client: Any) -> bool:
     """Make the client's own receive thread run `receive`; True if it was not doing so already.
 
-    The client's loop reads each frame through its private `__recv_topic_frame` and then decodes and
-    dispatches it itself. An instance attribute of that name shadows the method: the thread's next read
+    The client's loop reads each frame through a private method and then decodes and dispatches it
+    itself; `client_internals.replace_frame_read` shadows that method: the thread's next read
     enters `receive` and stays there until the client stops; the frame read before the swap is the
     client's last, and this call waits for the swap. A client without that method (another version)
     keeps its own loop, with a warning.
     """
-    if getattr(client.recv_topic_thread, "name", "") == RECEIVE_THREAD or CLIENT_READ in vars(client):
+    if getattr(client.recv_topic_thread, "name", "") == RECEIVE_THREAD or frame_read_replaced(client):
         return False
-    if not callable(getattr(type(client), CLIENT_READ, None)):
-        log.warning("this projectairsim client has no %s: its own receive loop stays in use", CLIENT_READ)
-        vars(client)[CLIENT_READ] = None  # warns once; a client without the method never reads it
+    if not can_replace_frame_read(client):
+        log.warning("this projectairsim client has no %s: its own receive loop stays in use", FRAME_READ)
+        replace_frame_read(client, None)  # warns once; a client without the method never reads it
         return False
 
     entered = threading.Event()
@@ -168,7 +173,7 @@ def take_over(client: Any) -> bool:
         if client.state:  # the socket closed under a live client: the client's loop would spin
             time.sleep(0.1)
 
-    vars(client)[CLIENT_READ] = read
+    replace_frame_read(client, read)
     # The client's thread reads again within its 100 ms receive timeout; until then a frame would still
     # be the client's to decode, so the bridge subscribes nothing before the swap has happened.
     if not entered.wait(TAKE_OVER_WAIT_S):

@@ -204,7 +204,7 @@ class ConnectionPoll(rospy.topics.Poller):
     rospy gives every topic an epoll object and never closes it; it goes only when the topic is collected,
     which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
     1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
-    `realtime.tune_process` installs it for every topic made afterwards, with the frozen heap.
+    `process_tuning.tune_process` installs it for every topic made afterwards, with the frozen heap.
 
     It watches what rospy's epoll watches: an error, a hang-up, and the peer's half-close (POLLRDHUP, the
     FIN of a closed peer). rospy's own poll(2) fallback misses the half-close, so a connection whose peer

@@ -11,7 +11,7 @@ from typing import Any
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.engine.bridges import Bridge, Services, _accepted
+from airsim_mapper.engine.bridges import Bridge, BridgeParts, _accepted
 from airsim_mapper.engine.replays import LatchedReplays, connection_header
 from airsim_mapper.engine.ros_link import FrameUnknown
 from airsim_mapper.engine.sim_link import SimLinkError
@@ -30,8 +30,8 @@ SIM_REPLY_S = 30.0
 class RosToSim(Bridge):
     """ROS subscriber -> converter -> sim topic publish, sim service call, or an engine action."""
 
-    def __init__(self, spec: BridgeSpec, services: Services) -> None:
-        super().__init__(spec, services)
+    def __init__(self, spec: BridgeSpec, parts: BridgeParts) -> None:
+        super().__init__(spec, parts)
         self.convert = registry.get(spec.converter)
         self.subscriber: Any = None
         self.last_message = 0.0
@@ -40,10 +40,10 @@ class RosToSim(Bridge):
         # connection is ignored.
         self.replays = None
         if self.info.runner == catalog.ACTION:
-            self.replays = services.replays.setdefault(spec.ros, LatchedReplays())
+            self.replays = parts.replays.setdefault(spec.ros, LatchedReplays())
 
     def start(self) -> None:
-        self.subscriber = self.services.ros.subscriber(
+        self.subscriber = self.parts.ros.subscriber(
             self.spec.ros, self.spec.ros_type, self.on_message, queue_size=self.spec.options.queue_size
         )
 
@@ -73,14 +73,14 @@ class RosToSim(Bridge):
         self.last_message = time.monotonic()
         try:
             if runner == catalog.SEND:
-                self.services.sim.publish(spec.sim, params)
+                self.parts.sim.publish(spec.sim, params)
                 self.stats.messages += 1
             elif runner == catalog.CALL:
                 self.moving = spec.options.watchdog_s is not None
-                future = self.services.sim.call_async(spec.sim, params)
+                future = self.parts.sim.call_async(spec.sim, params)
                 future.add_done_callback(lambda f, p=params: self._on_reply(f, p))
             else:
-                self.services.node_action(self.info.action, params)
+                self.parts.node_action(self.info.action, params)
                 self.stats.messages += 1
         except Exception as exc:  # the node never dies from one bad message
             self.fail(f"could not forward a message on {spec.ros}: {exc}")
@@ -95,7 +95,7 @@ class RosToSim(Bridge):
             or header.frame_id.removeprefix("/") in ("", target.removeprefix("/"))
         ):
             return ros_msg  # a leading slash is ignored, as tf2 does
-        return self.services.ros.transform_pose(ros_msg, target)
+        return self.parts.ros.transform_pose(ros_msg, target)
 
     def _on_reply(self, future: Any, params: dict) -> None:
         try:
@@ -129,11 +129,11 @@ class RosToSim(Bridge):
         method = self.spec.params.get("stop_method", "Hover")
         robot_path = self.spec.sim.rsplit("/", 1)[0]
         log.info("%s: %s: sending %s", self.spec.name, why, method)
-        self.services.sim.call_async(f"{robot_path}/{method}", {})
+        self.parts.sim.call_async(f"{robot_path}/{method}", {})
 
     def stop(self) -> None:
         # The subscriber's callback is a method of this bridge: dropped, the stopped bridge is freed by
-        # reference counting (a cycle would outlive it in the frozen heap, engine/realtime.py)
+        # reference counting (a cycle would outlive it in the frozen heap, engine/process_tuning.py)
         subscriber, self.subscriber = self.subscriber, None
         if subscriber is not None:
             subscriber.unregister()
@@ -148,13 +148,13 @@ class RosToSim(Bridge):
 class RosService(Bridge):
     """A ROS service (std_srvs) whose requests become sim service calls."""
 
-    def __init__(self, spec: BridgeSpec, services: Services) -> None:
-        super().__init__(spec, services)
+    def __init__(self, spec: BridgeSpec, parts: BridgeParts) -> None:
+        super().__init__(spec, parts)
         self.convert = registry.get(spec.converter)
         self.service: Any = None
 
     def start(self) -> None:
-        self.service, self._response = self.services.ros.service(
+        self.service, self._response = self.parts.ros.service(
             self.spec.ros, self.spec.ros_type, self.on_request
         )
 
@@ -166,7 +166,7 @@ class RosService(Bridge):
             if self.info.runner == catalog.SERVE_ALL:
                 return self._on_all_robots(response, params)
             started = time.monotonic()
-            result = self.services.sim.call(self.spec.sim, params, timeout=reply_timeout(params, SIM_REPLY_S))
+            result = self.parts.sim.call(self.spec.sim, params, timeout=reply_timeout(params, SIM_REPLY_S))
         except (ConversionError, SimLinkError) as exc:
             self.fail(str(exc))
             return _fill(response, False, str(exc))
@@ -184,7 +184,7 @@ class RosService(Bridge):
         """Call `<sim>/<robot>/<params.method>` on every robot of the scene at once; succeed if all do."""
         method = self.spec.params["method"]
         robots = list(self.spec.source.get("robots", []))
-        sim = self.services.sim
+        sim = self.parts.sim
         calls = {robot: sim.call_async(f"{self.spec.sim}/{robot}/{method}", params) for robot in robots}
         wait = reply_timeout(params, float(self.spec.params.get("timeout_s", 60.0)))
         failed = []

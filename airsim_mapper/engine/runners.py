@@ -4,7 +4,7 @@ never touches the engine."""
 from __future__ import annotations
 
 from airsim_mapper.convert import catalog
-from airsim_mapper.engine.bridges import Bridge, MountTransform, Services, SimToRos, StreamingImage
+from airsim_mapper.engine.bridges import Bridge, BridgeParts, MountTransform, SimToRos, StreamingImage
 from airsim_mapper.engine.ros_to_sim import RosService, RosToSim
 from airsim_mapper.mapping.model import BridgeSpec
 
@@ -21,8 +21,8 @@ RUNNERS: dict[str, type[Bridge]] = {
 }
 
 
-def build(spec: BridgeSpec, services: Services) -> Bridge:
+def build(spec: BridgeSpec, parts: BridgeParts) -> Bridge:
     """The runner the catalogue names for the spec's converter (a static mount's, for `tf: {static}`)."""
     if spec.tf is not None and spec.tf.static:
-        return MountTransform(spec, services)
-    return RUNNERS[catalog.CONVERTERS[spec.converter].runner](spec, services)
+        return MountTransform(spec, parts)
+    return RUNNERS[catalog.CONVERTERS[spec.converter].runner](spec, parts)

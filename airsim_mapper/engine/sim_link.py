@@ -39,10 +39,10 @@ from airsim_mapper.engine.receive import (
     FAST_MIN_BYTES,
     RECEIVE_THREAD,
     close_client,
-    decode_body,
     receive,
     take_over,
     unknown_topic,
+    unpack_message,
 )
 from airsim_mapper.logs import RateLimitedLog, ros_logger
 
@@ -209,7 +209,7 @@ class SimLink:
                 self._warn(f"{topic}: a callback failed: {type(exc).__name__}: {exc}", exc)
 
     def _decode(self, topic: str, entry: dict, body: Buffer) -> Any:
-        message, fast = decode_body(body, self._only_ours(topic, entry["callbacks"]))
+        message, fast = unpack_message(body, self._only_ours(topic, entry["callbacks"]))
         self.fast_frames += fast
         return message
 

@@ -12,8 +12,8 @@ and their peers never notice more than a pause. A client supplied by a mission s
 behind its owner's back: the engine only reports "stale" until the script loads or adopts a scene again.
 
 The supervisor owns the connection state (`state`, `reason`, `counters`, when a stall began); it changes
-it under the engine's lock, since a loss also stops the bridges' robots and a reconnect swaps the link
-the bridges use.
+it under the engine's lock, which it is given, since a loss also stops the bridges' robots and a reconnect
+swaps the link the bridges use. It asks the engine through the methods of `Supervised` only.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.health import (
@@ -35,12 +35,10 @@ from airsim_mapper.engine.health import (
     retry_quietly,
 )
 from airsim_mapper.engine.ros_to_sim import RosToSim
-from airsim_mapper.engine.sim_link import close_client
+from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
 from airsim_mapper.logs import ros_logger
-
-if TYPE_CHECKING:
-    from airsim_mapper.engine.engine import Engine
+from airsim_mapper.scene import Scene
 
 log = ros_logger("airsim_mapper.engine")
 WATCHDOG_PERIOD_S = 0.05  # the shortest wait between two checks
@@ -49,11 +47,37 @@ STATUS_PERIOD_S = 1.0
 RELOAD_TIMEOUT_S = 20.0  # a reconnect's scene load that takes longer is abandoned (its client closed)
 
 
-class Supervisor:
-    """Watches one engine's simulator link, reconnects it, runs the command watchdog, publishes status."""
+class Supervised(Protocol):
+    """What the supervisor asks of the engine it watches (core.Engine)."""
 
-    def __init__(self, engine: Engine, client_factory: Callable[[], Any] | None) -> None:
+    def link(self) -> SimLink: ...
+    def scene_now(self) -> Scene | None: ...
+    def make_link(self, client: Any) -> SimLink: ...
+    def world_on(self, client: Any, scene: Scene) -> Any: ...
+    def move_to(self, link: SimLink, client: Any, world: Any) -> SimLink: ...
+    def revive_link(self) -> None: ...
+    def link_lost(self, abandon: bool) -> None: ...
+    def commands(self) -> list[RosToSim]: ...
+    def bridge_count(self) -> int: ...
+    def newest_arrival(self) -> float: ...
+    def report(self) -> dict[str, Any]: ...
+
+
+class Supervisor:
+    """Watches one engine's simulator link, reconnects it, runs the command watchdog, publishes status.
+
+    `lock` is the engine's: the connection state changes with the engine's link and bridges. Construction
+    starts nothing; `start` starts the health, watchdog and status threads."""
+
+    def __init__(
+        self,
+        engine: Supervised,
+        lock: threading.RLock,
+        client_factory: Callable[[], Any] | None,
+        status: StatusPublisher,
+    ) -> None:
         self.engine = engine
+        self._lock = lock
         self.client_factory = client_factory
         self.state = CONNECTED
         self.reason = ""
@@ -61,16 +85,15 @@ class Supervisor:
         self.stalled_since: float | None = None  # unresponsive on an open connection since (monotonic)
         self.running = True
         self._stopping = threading.Event()
-        self._status = StatusPublisher(engine.ros.publisher, engine.ros_name)
-        self._threads = [
-            threading.Thread(target=self._watchdog_loop, name="watchdog", daemon=True),
-            threading.Thread(target=self._health_loop, name="sim-health", daemon=True),
-            threading.Thread(target=self._status_loop, name="status", daemon=True),
-        ]
+        self._status = status
 
     def start(self) -> None:
-        for thread in self._threads:
-            thread.start()
+        for loop, name in (
+            (self._watchdog_loop, "watchdog"),
+            (self._health_loop, "sim-health"),
+            (self._status_loop, "status"),
+        ):
+            threading.Thread(target=loop, name=name, daemon=True).start()
 
     def stop(self) -> None:
         """The loops end (within a probe period); the status publisher stays until `close`."""
@@ -87,13 +110,11 @@ class Supervisor:
     def require_link(self, what: str) -> None:
         """Before a scene change (under the engine's lock): a lost link is an error, except a supplied
         client the owner revived."""
-        engine = self.engine
-        if not engine.sim.dead:
+        if not self.engine.link().dead:
             return
         if self.client_factory is not None:
             raise EngineError(f"{what}: the simulator connection is lost; the node is reconnecting")
-        engine.sim.stop_loop()  # the mission script's client: its owner says it works again
-        engine.swap_link(engine.make_link(engine.client), engine.client, engine.world)
+        self.engine.revive_link()  # the mission script's client: its owner says it works again
         self.state, self.reason = CONNECTED, ""
 
     def _health_loop(self) -> None:
@@ -102,8 +123,9 @@ class Supervisor:
         while self.running:
             now = time.monotonic()
             if self.state == CONNECTED or self.stalled_since is not None:
-                self.engine.sim.ensure_receiver()
-                verdict = check.check(self.engine.sim, self._frame_age)
+                link = self.engine.link()
+                link.ensure_receiver()
+                verdict = check.check(link, self._frame_age)
                 if not self.running:
                     break
                 if verdict.kind == LOST:
@@ -131,7 +153,7 @@ class Supervisor:
 
     def _stalled(self, reason: str) -> None:
         """The simulator stopped answering on an open connection: stale, but nothing is torn down."""
-        with self.engine.lock:
+        with self._lock:
             if self.state != CONNECTED:
                 return
             self.state, self.reason = STALE, f"unresponsive: {reason}"
@@ -142,13 +164,13 @@ class Supervisor:
 
     def _frame_age(self) -> float:
         """Seconds since the newest topic frame arrived (infinite before any)."""
-        newest = self.engine.hub.newest_arrival()
+        newest = self.engine.newest_arrival()
         return time.monotonic() - newest if newest else math.inf
 
     def _answering(self, reason: str) -> None:
         """A probe was answered (no `reason`), or topic frames arrive while probes go unanswered (`reason`
         counts them): an unresponsive simulator is back, on the same connection and scene."""
-        with self.engine.lock:
+        with self._lock:
             if self.state != CONNECTED and self.stalled_since is None:
                 return  # lost: only a reconnect brings it back
             since, before = self.stalled_since, self.reason
@@ -170,20 +192,13 @@ class Supervisor:
 
     def sim_lost(self, reason: str) -> None:
         """Mark the link lost: nothing more is sent on it; robots are no longer driven."""
-        engine = self.engine
-        with engine.lock:
+        with self._lock:
             if self.state != CONNECTED and self.stalled_since is None:
                 return
             self.stalled_since = None
             self.state, self.reason = STALE, reason
             self.counters["sim_losses"] += 1
-            for bridge in list(engine.bridges.values()):
-                if isinstance(bridge, RosToSim):
-                    bridge.moving = False
-            if self.client_factory is not None:
-                engine.sim.abandon()
-            else:
-                engine.sim.mark_dead()
+            self.engine.link_lost(abandon=self.client_factory is not None)
         how = "reconnecting" if self.client_factory is not None else "the mission script owns the client"
         log.error("simulator lost (%s); topics are stale; %s", reason, how)
         self.publish_status()
@@ -200,31 +215,29 @@ class Supervisor:
         except SimUnreachable as exc:
             return str(exc)
         start = time.monotonic()
-        scene = engine.scene
+        scene = engine.scene_now()
         link = engine.make_link(client)  # first, so the scene load already uses its receive loop
         guard = threading.Timer(RELOAD_TIMEOUT_S, close_client, (client,))
         guard.start()
         try:
-            world = engine.load_world(client, scene, engine.sim_config_path) if scene else None
+            world = engine.world_on(client, scene) if scene else None
         except Exception as exc:
             link.abandon()
             return f"reloading {scene.file if scene else 'the scene'} failed: {type(exc).__name__}: {exc}"
         finally:
             guard.cancel()
-        with engine.lock:
-            if not self.running or engine.scene is not scene:
+        with self._lock:
+            if not self.running or engine.scene_now() is not scene:
                 link.abandon()
                 return "shutting down" if not self.running else "the scene changed meanwhile"
-            old = engine.sim
-            engine.mounts.clear()
-            engine.swap_link(link, client, world)
+            old = engine.move_to(link, client, world)
             self.state, self.reason = CONNECTED, ""
             self.counters["reconnects"] += 1
         old.stop_loop()
         log.info(
             "simulator back: %s reloaded, %d bridges restored in %.2f s",
             scene.file if scene else "no scene",
-            len(engine.bridges),
+            engine.bridge_count(),
             time.monotonic() - start,
         )
         self.publish_status()
@@ -236,36 +249,15 @@ class Supervisor:
             self.publish_status()
 
     def status(self) -> dict[str, Any]:
-        """The node's state, its counters and the statistics of every simulator stream."""
-        engine = self.engine
-        now = time.monotonic()
-        streams = {
-            topic: {
-                "received": s.stats.received,
-                "dropped": s.stats.dropped,
-                "handled": s.stats.handled,
-                "errors": s.stats.errors,
-                "age_s": round(now - s.stats.last_receive, 3) if s.stats.last_receive else None,
-                **s.stats.take_peaks(),
-            }
-            for topic, s in engine.hub.streams().items()
-        }
-        errors = {name: b.stats.errors for name, b in list(engine.bridges.items()) if b.stats.errors}
+        """The node's state, its counters and the engine's report (the scene, every simulator stream's
+        statistics, ...)."""
+        report = self.engine.report()
         return {
             "state": self.state,
             "reason": self.reason,
-            "scene": engine.scene.file if engine.scene else None,
+            "scene": report["scene"],
             **self.counters,
-            "bad_frames": engine.frame_counts.bad,
-            "oversized_frames": engine.frame_counts.oversized,
-            "callback_errors": engine.frame_counts.callback_errors,
-            "sim_time_jumps_back": engine.sim_time.jumps_back,
-            "sim_time_last_jump_back_s": round(engine.sim_time.last_jump_s, 3),
-            "gc_max_ms": engine.gc_pauses.take_peak_ms(),
-            "gc_frozen": engine.gc_frozen,  # objects kept out of full collections (freeze_heap)
-            "streams": streams,
-            "bridge_errors": errors,
-            **({"mapping": engine.mapping_report} if engine.mapping_report else {}),
+            **report,
         }
 
     def publish_status(self) -> None:
@@ -282,13 +274,12 @@ class Supervisor:
         while self.running:
             now = time.monotonic()
             wait = WATCHDOG_IDLE_S
-            for bridge in list(self.engine.bridges.values()):
-                if isinstance(bridge, RosToSim):
-                    try:
-                        due = bridge.check_watchdog(now)
-                    except Exception:
-                        log.exception("watchdog of %s failed", bridge.spec.name)
-                        continue
-                    if due is not None:
-                        wait = min(wait, due)
+            for command in self.engine.commands():
+                try:
+                    due = command.check_watchdog(now)
+                except Exception:
+                    log.exception("watchdog of %s failed", command.spec.name)
+                    continue
+                if due is not None:
+                    wait = min(wait, due)
             self._stopping.wait(max(wait, WATCHDOG_PERIOD_S))

@@ -345,7 +345,7 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
     import rospy
     from std_msgs.msg import String
 
-    from airsim_mapper.engine.bridges import Services
+    from airsim_mapper.engine.bridges import BridgeParts
     from airsim_mapper.engine.mounts import CameraMounts
     from airsim_mapper.engine.ros_link import RosLink
     from airsim_mapper.engine.ros_to_sim import RosToSim
@@ -354,7 +354,7 @@ def test_a_re_created_load_scene_subscriber_ignores_the_latched_replay(ros_sessi
 
     (spec,) = expand(load_mapping("default"), None, "replay_probe")
     actions: list[str] = []
-    services = Services(
+    services = BridgeParts(
         None, None, RosLink(), CameraMounts(), lambda _action, params: actions.append(params["scene"])
     )
     publisher = rospy.Publisher(spec.ros, String, queue_size=1, latch=True)

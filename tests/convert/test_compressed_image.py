@@ -95,7 +95,7 @@ def test_the_documented_rule_publishes_the_png_and_counts_raw_pixels_as_bridge_e
     from fakes import FakeRos, FakeSimLink
     from harness import SIM_CONFIG, wait_until
 
-    from airsim_mapper.engine.bridges import Services
+    from airsim_mapper.engine.bridges import BridgeParts
     from airsim_mapper.engine.hub import StreamHub
     from airsim_mapper.engine.runners import build
     from airsim_mapper.mapping.expand import expand
@@ -108,7 +108,7 @@ def test_the_documented_rule_publishes_the_png_and_counts_raw_pixels_as_bridge_e
     spec = next(spec for spec in specs if spec.ros == ROS)
     assert (spec.sim, spec.ros_type, spec.options.lazy) == (SIM, "sensor_msgs/CompressedImage", True)
     sim, ros = FakeSimLink(), FakeRos()
-    bridge = build(spec, Services(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda *_: None))
+    bridge = build(spec, BridgeParts(sim, StreamHub(sim, ros.send_tf), ros, {}, lambda *_: None))
     bridge.start()
     assert SIM not in sim.subscriptions  # lazy: nothing from the simulator without a subscriber
     ros.publishers[ROS].subscribers(1)

@@ -1,5 +1,5 @@
 """What a live mapping edit stops is freed by reference counting, with no garbage collection: the node
-freezes its heap (engine/realtime.py), and a reference cycle in there is never collected (about 38 kB an
+freezes its heap (engine/process_tuning.py), and a reference cycle in there is never collected (about 38 kB an
 edit before these were broken, docs/reliability.md)."""
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ import pytest
 from fakes import EngineRig
 from harness import SIM_CONFIG
 
-from airsim_mapper.engine.realtime import PromptQueuedConnection
 from airsim_mapper.engine.ros_link import ConnectionPoll
+from airsim_mapper.engine.rospy_internals import PromptQueuedConnection
 from airsim_mapper.mapping.loader import load_mapping_text
 
 SCENE = "scene_drone_sensors.jsonc"

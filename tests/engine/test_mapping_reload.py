@@ -31,6 +31,9 @@ class FakeEngine:
         self.applied.append(mapping)
         return BridgeDiff((), (), ("imu[R/I]",), ("pose[R]",))
 
+    def report_mapping(self, report: dict) -> None:
+        self.mapping_report = report
+
     def publish_status(self) -> None:
         self.published += 1
 

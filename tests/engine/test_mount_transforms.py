@@ -12,7 +12,7 @@ from harness import SIM_CONFIG
 
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.pose import camera_pose_key
-from airsim_mapper.engine.bridges import MountTransform, Services, SimToRos
+from airsim_mapper.engine.bridges import BridgeParts, MountTransform, SimToRos
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.runners import build
@@ -35,9 +35,9 @@ def ros() -> FakeRos:
 
 
 @pytest.fixture
-def services(ros: FakeRos) -> Services:
+def services(ros: FakeRos) -> BridgeParts:
     sim = FakeSimLink()
-    return Services(sim, StreamHub(sim, ros.send_tf), ros, CameraMounts(), lambda *_: None)
+    return BridgeParts(sim, StreamHub(sim, ros.send_tf), ros, CameraMounts(), lambda *_: None)
 
 
 def robot_pose(seed: int) -> dict:

@@ -23,7 +23,7 @@ from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.image import BufferImage
 from airsim_mapper.convert.pointcloud import BufferPointCloud2, pointcloud
 from airsim_mapper.engine.publish import publish
-from airsim_mapper.engine.realtime import PromptQueuedConnection, unsent
+from airsim_mapper.engine.rospy_internals import PromptQueuedConnection, unsent
 
 TOPIC = "/test_publish/image"
 QUEUE = 2

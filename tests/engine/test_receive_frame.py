@@ -19,9 +19,9 @@ from airsim_mapper.engine.receive import (
     READ_AHEAD_FRAMES,
     FrameWait,
     close_client,
-    decode_body,
     read_ahead,
     receive_frame,
+    unpack_message,
 )
 from airsim_mapper.engine.sim_link import SimLink
 from airsim_mapper.simserver.protocol import encode_frame
@@ -37,7 +37,7 @@ def test_a_received_frame_is_a_view_whose_slices_outlive_it(tmp_path):
         view = receive_frame(client)
         assert isinstance(view, memoryview) and bytes(view) == frame
         header = parse_frame_header(view)
-        message, fast = decode_body(view[header.body_start : header.body_end], fast=True)
+        message, fast = unpack_message(view[header.body_start : header.body_end], fast=True)
         del view, header
         gc.collect()
         # the pixels are still a view of the frame, whose NNG message lives as long as they do

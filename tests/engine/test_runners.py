@@ -14,7 +14,7 @@ from std_msgs.msg import String
 from std_srvs.srv import TriggerRequest
 
 from airsim_mapper.convert.pose import camera_pose_key
-from airsim_mapper.engine.bridges import Services, SimToRos, StreamingImage
+from airsim_mapper.engine.bridges import BridgeParts, SimToRos, StreamingImage
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.ros_to_sim import RosService, RosToSim
@@ -45,9 +45,9 @@ def ros() -> FakeRos:
 
 
 @pytest.fixture
-def services(sim: FakeSimLink, ros: FakeRos) -> Services:
+def services(sim: FakeSimLink, ros: FakeRos) -> BridgeParts:
     actions: list[tuple[str, dict]] = []
-    found = Services(
+    found = BridgeParts(
         sim, StreamHub(sim, ros.send_tf), ros, CameraMounts(), lambda a, p: actions.append((a, p))
     )
     found.actions = actions  # type: ignore[attr-defined]

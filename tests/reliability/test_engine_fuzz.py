@@ -12,7 +12,7 @@ from harness import wait_until
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from airsim_mapper.engine.bridges import Services, SimToRos
+from airsim_mapper.engine.bridges import BridgeParts, SimToRos
 from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.runners import build
 from airsim_mapper.engine.streams import Stream
@@ -85,7 +85,7 @@ class NoSim:
 @pytest.fixture(scope="module")
 def bridges() -> list[SimToRos]:
     specs = expand(load_mapping(DEFAULT_MAPPING), read_scene(PROJECT_SIM_CONFIG, SCENE), "fuzz", "")
-    services = Services(
+    services = BridgeParts(
         NoSim(), NoSim(), FakeRos(), CameraMounts(), lambda *_: None
     )  # "ros" stamps read its clock
     out = [build(spec, services) for spec in specs if spec.direction == SIM_TO_ROS]

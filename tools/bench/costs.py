@@ -2,7 +2,7 @@
 
 Each case is one frame, packed exactly as the headless server (and the C++ server) packs it, taken through:
 - bridge: the node's path. The frame's header parsed where the frame lies (`SimLink.dispatch`), the body
-  decoded in place (`receive.decode_body`: large bodies straight into numpy arrays and pixel views), the
+  decoded in place (`receive.unpack_message`: large bodies straight into numpy arrays and pixel views), the
   bridge's converter, and the message serialised as the node publishes it (`publish.serialized`: a head,
   then the pixels or points from where they are, for one `sendmsg`);
 - bridge, one buffer: the same message decoded through msgpack's outer unpacking (a copy of the body) and
@@ -33,7 +33,7 @@ from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.fast_frames import parse_frame_header
 from airsim_mapper.engine.publish import serialized
-from airsim_mapper.engine.receive import decode_body
+from airsim_mapper.engine.receive import unpack_message
 from airsim_mapper.simserver import protocol
 from tools.bench import reference
 
@@ -194,16 +194,16 @@ def side_by_side_cpu_ms(fns: tuple[Callable[[], Any], ...], repeat: int) -> list
 
 def bridge_unpack(frame: bytes) -> Any:
     """A frame's message as the bridge's receive loop decodes it: the header parsed in place, as
-    `SimLink.dispatch` does for a large frame, then `decode_body` on a view of the body."""
+    `SimLink.dispatch` does for a large frame, then `unpack_message` on a view of the body."""
     header = parse_frame_header(frame)
     if header is None:
         raise AssertionError("a cost case's frame must be large enough for the bridge's header parser")
-    return decode_body(memoryview(frame)[header.body_start : header.body_end], fast=True)[0]
+    return unpack_message(memoryview(frame)[header.body_start : header.body_end], fast=True)[0]
 
 
 def one_buffer_unpack(frame: bytes) -> Any:
     """A frame's message decoded after msgpack's outer unpacking, which copies the body."""
-    return decode_body(msgpack.unpackb(frame, raw=True)[2], fast=True)[0]
+    return unpack_message(msgpack.unpackb(frame, raw=True)[2], fast=True)[0]
 
 
 def node_serialize(msg: Any) -> tuple[Any, ...]:

@@ -56,7 +56,7 @@ class SerialisingPublisher:
 def run(mapping: str, messages: int) -> dict[str, float]:
     from tf2_msgs.msg import TFMessage
 
-    from airsim_mapper.engine.bridges import Services, SimToRos
+    from airsim_mapper.engine.bridges import BridgeParts, SimToRos
     from airsim_mapper.engine.mounts import CameraMounts
     from airsim_mapper.engine.runners import build
     from airsim_mapper.mapping.expand import expand
@@ -111,7 +111,7 @@ def run(mapping: str, messages: int) -> dict[str, float]:
             return 0
 
     ros, hub = Ros(), Hub()
-    services = Services(None, hub, ros, CameraMounts(), lambda *_: None)  # type: ignore[arg-type]
+    services = BridgeParts(None, hub, ros, CameraMounts(), lambda *_: None)  # type: ignore[arg-type]
     for spec in specs:
         if spec.direction == "sim_to_ros":
             bridge = build(spec, services)

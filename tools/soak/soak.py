@@ -330,7 +330,7 @@ def run(seconds: float, workdir: Path) -> int:
 
         rospy.init_node("soak_listener", anonymous=True, disable_signals=True)
         sys.setswitchinterval(SWITCH_INTERVAL_S)  # the monitor must not add GIL waits to the gaps it measures
-        from airsim_mapper.engine.realtime import GcPauses
+        from airsim_mapper.engine.process_tuning import GcPauses
 
         own_gc = GcPauses()
         rig.wait_topics([POSE_TOPIC], bridge)

@@ -13,7 +13,7 @@ import time
 import pytest
 from harness import wait_until
 
-from airsim_mapper.engine.realtime import PromptQueuedConnection
+from airsim_mapper.engine.rospy_internals import PromptQueuedConnection
 from airsim_mapper.tuning import SWITCH_INTERVAL_S
 
 
@@ -273,7 +273,7 @@ def test_a_broken_socket_surfaces_on_the_next_publish(pair) -> None:
 PROBE = (
     "import sys, rospy.topics;"
     "from airsim_mapper.tuning import blas_threads;"
-    "from airsim_mapper.engine.realtime import tune_process;"
+    "from airsim_mapper.engine.process_tuning import tune_process;"
     "tune_process();"
     "print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__, *blas_threads())"
 )
@@ -294,7 +294,7 @@ def test_tune_process_installs_both_settings_and_can_be_turned_off() -> None:
 def test_gc_pauses_reports_the_longest_collection_once() -> None:
     import gc
 
-    from airsim_mapper.engine.realtime import GcPauses
+    from airsim_mapper.engine.process_tuning import GcPauses
 
     pauses = GcPauses()
     try:
@@ -313,7 +313,7 @@ def test_gc_pauses_reports_the_longest_collection_once() -> None:
 
 FREEZE_PROBE = """
 import gc, time, weakref
-from airsim_mapper.engine.realtime import freeze_heap, thaw_heap
+from airsim_mapper.engine.process_tuning import freeze_heap, thaw_heap
 class Node: pass
 kept = [[] for _ in range(200_000)]
 cycle = Node(); cycle.me = cycle; alive = weakref.ref(cycle)
@@ -344,12 +344,13 @@ def test_a_frozen_heap_is_skipped_by_full_collections_and_thawing_frees_old_cycl
 ENGINE_PROBE = """
 import sys, types, rospy.topics
 from airsim_mapper.tuning import blas_threads
-from airsim_mapper.engine.engine import Engine
+from airsim_mapper.engine import Engine, NodeNames, SimAccess
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.resources import DEFAULT_MAPPING
 client = types.SimpleNamespace(socket_topics=None, socket_services=None, subs={}, topics={}, state=True)
 before = blas_threads()
-engine = Engine(client, load_mapping(DEFAULT_MAPPING), "sim_config", "probe", tune=sys.argv[1] == "tune")
+names, sim = NodeNames("probe"), SimAccess("sim_config")
+engine = Engine(client, load_mapping(DEFAULT_MAPPING), names, sim, tune=sys.argv[1] == "tune")
 blas = "kept" if blas_threads() == before else ",".join(map(str, blas_threads()))
 print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__, blas, engine._freeze_heap)
 """

@@ -1,29 +1,26 @@
-"""The bridge's process settings: the shared thread tuning, prompt rospy publishing, a frozen heap.
+"""The one place that touches rospy's internals (pinned: Debian 12's rospy, python3-rospy 1.15.15).
 
-`airsim_mapper.tuning` gives one BLAS thread and a 0.5 ms GIL switch interval. On top, the bridge uses
-`PromptQueuedConnection`: rospy's queued connection, which here sends on the publishing thread when the
-socket takes the message at once, instead of waking a writer thread and yielding the GIL on every
-publish. `freeze_heap` keeps the objects of a running scene out of full collections, and `GcPauses`
-reports the longest garbage collection for the status topic.
-
-The soak (`make soak`) measures their effect; `AIRSIM_MAPPER_NO_TUNING=1` turns off the thread settings and
-prompt publishing for comparison (the heap is frozen either way).
+rospy's queued publisher connection (`rospy.impl.tcpros_pubsub.QueuedConnection`) hands every message to
+a writer thread; `PromptQueuedConnection` subclasses it to send on the publishing thread when it can, and
+so relies on its private state (`_lock`, `_cond_data_available`, `_queue`, `_queue_size`, `_error`,
+`_connection`, `_run`). `publish_promptly` and `watch_connections_without_a_file` put the bridge's classes
+in place of rospy's in `rospy.topics`. `missing_internals` says what of this is gone in the installed rospy.
 """
 
 from __future__ import annotations
 
-import gc
+import re
 import socket
 import threading
-import time
 
-import rospy
 import rospy.topics
 from rospy.impl.tcpros_pubsub import QueuedConnection
 
 from airsim_mapper.convert.buffer_data import Part
 from airsim_mapper.engine.ros_link import ConnectionPoll
-from airsim_mapper.tuning import tune_threads
+
+PINNED = "Debian 12's rospy (python3-rospy 1.15.15)"
+QUEUE_STATE = ("_connection", "_queue_size", "_lock", "_cond_data_available", "_queue", "_error")
 
 
 class PromptQueuedConnection(QueuedConnection):
@@ -151,56 +148,27 @@ class WakeOnClose:
             self._data_available.notify()
 
 
-def tune_process() -> None:
-    """Apply the thread settings and prompt publishing to this process (idempotent).
+def publish_promptly() -> None:
+    """Every rospy publisher connection made from now on is a `PromptQueuedConnection`."""
+    rospy.topics.QueuedConnection = PromptQueuedConnection
 
-    The node applies them; a mission script's wrapper only with `tune_process=True`. rospy's topics also
-    watch their connections without an open file of their own (`ConnectionPoll`): with the heap frozen,
-    the one rospy makes would outlive every topic."""
+
+def watch_connections_without_a_file() -> None:
+    """rospy's topics made from now on watch their connections with `ConnectionPoll` (ros_link.py)."""
     rospy.topics.Poller = ConnectionPoll
-    if tune_threads():
-        rospy.topics.QueuedConnection = PromptQueuedConnection
 
 
-def freeze_heap() -> float:
-    """Collect once, then move every surviving object out of the collector's sight; the time in ms.
+def missing_internals() -> list[str]:
+    """The private names of the installed rospy this module relies on that are gone or different."""
+    import inspect
 
-    A full collection stops every thread for as long as it takes to walk all tracked objects, tens of
-    thousands after the bridge's imports alone, in the middle of the pose path (docs/reliability.md has
-    the measured pauses). After `gc.freeze()` later collections walk only what was made since.
-    """
-    started = time.perf_counter()
-    gc.collect()
-    gc.freeze()
-    return (time.perf_counter() - started) * 1000.0
-
-
-def thaw_heap() -> None:
-    """Undo `freeze_heap` (before a scene change), so the replaced bridges' cycles are still collected."""
-    gc.unfreeze()
-
-
-class GcPauses:
-    """The longest garbage collection of this process per window: a collection stops every thread."""
-
-    def __init__(self) -> None:
-        self._started = 0.0
-        self.longest = 0.0
-        self.collections = 0
-        gc.callbacks.append(self._on_gc)
-
-    def _on_gc(self, phase: str, _info: dict) -> None:
-        if phase == "start":
-            self._started = time.perf_counter()
-        else:
-            self.collections += 1
-            self.longest = max(self.longest, time.perf_counter() - self._started)
-
-    def take_peak_ms(self) -> float:
-        """The longest pause since the previous call, in milliseconds."""
-        longest, self.longest = self.longest, 0.0
-        return round(longest * 1000, 1)
-
-    def close(self) -> None:
-        if self._on_gc in gc.callbacks:
-            gc.callbacks.remove(self._on_gc)
+    missing = [
+        f"rospy.topics.{name}" for name in ("QueuedConnection", "Poller") if not hasattr(rospy.topics, name)
+    ]
+    if not callable(getattr(QueuedConnection, "_run", None)):
+        missing.append("QueuedConnection._run")
+    made = inspect.getsource(QueuedConnection.__init__)
+    missing.extend(
+        f"QueuedConnection.{name}" for name in QUEUE_STATE if not re.search(rf"self\.{name}\s*=", made)
+    )
+    return missing

@@ -12,29 +12,26 @@ link under the engine's one lock (`Engine.lock`).
 
 from __future__ import annotations
 
-import contextlib
 import gc
-import logging
-import queue
 import threading
 import time
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, Services, SimToRos
-from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, BridgeParts, SimToRos
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
-from airsim_mapper.engine.realtime import GcPauses, freeze_heap, thaw_heap, tune_process
+from airsim_mapper.engine.node_setup import NodeNames, SimAccess
+from airsim_mapper.engine.process_tuning import GcPauses, freeze_heap, thaw_heap, tune_process
 from airsim_mapper.engine.ros_link import RosLink
+from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.runners import build
+from airsim_mapper.engine.scene_requests import SceneRequests
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
+from airsim_mapper.engine.status import StatusPublisher
 from airsim_mapper.engine.supervisor import Supervisor
-from airsim_mapper.engine.validated_world import load_validated_world
-from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import RateLimitedLog, ros_logger, shorten
+from airsim_mapper.logs import RateLimitedLog, ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, Mapping
@@ -44,47 +41,41 @@ from airsim_mapper.scene import Scene, read_scene
 
 log = ros_logger("airsim_mapper.engine")
 bridge_log = ros_logger("airsim_mapper.bridge")  # sim-time warnings, as the bridges' own
-MAX_QUEUED_SCENES = 8  # load_scene requests waiting for the scene-loader thread
-REFUSALS_LOGGED, REFUSALS_PERIOD_S = 10, 10.0  # at most this many refused loads logged per period
-SHOWN_LINE = 300  # characters of an error line a refusal log shows
 SHUTDOWN_TIMEOUT_S = 5.0  # shutdown's total budget; the simulator gets at most UNSUBSCRIBE_TIMEOUT_S of it
 UNSUBSCRIBE_TIMEOUT_S = 2.0
 
 
 class Engine:
-    """Owns the runners of one node: builds them from specs, reloads them on scene changes."""
+    """Owns the runners of one node: builds them from specs, reloads them on scene changes.
+
+    Construction starts nothing: `start` starts the scene-loader thread and the supervisor's."""
 
     def __init__(
         self,
         client: Any,
         mapping: Mapping,
-        sim_config_path: str | Path,
-        node_name: str,
-        namespace: str = "",
-        load_world: Callable[[Any, Scene, str], Any] | None = None,
-        client_factory: Callable[[], Any] | None = None,
-        tune: bool = False,
+        names: NodeNames,
+        sim: SimAccess,
         ros: RosLink | None = None,
-        link: Callable[[Any, FrameCounts], SimLink] = SimLink,
         frame_counts: FrameCounts | None = None,
-        ros_name: str | None = None,
+        tune: bool = False,
     ) -> None:
         if tune:
-            tune_process()
+            tune_process()  # before any topic is made: rospy's connections are chosen as topics connect
         self._freeze_heap = tune  # gc.freeze is process-wide: only for a process that asked for tuning
         self.gc_pauses = GcPauses()
         self.gc_frozen = 0
         self.client = client
         self.mapping = mapping
-        self.sim_config_path = str(sim_config_path)
-        self.node_name = node_name  # the mapping's <node_name>
-        self.ros_name = ros_name or node_name  # the node's ROS name: its status topic's, diagnostics' name
-        self.namespace = namespace
+        self.sim_config_path = str(sim.config_path)
+        self.node_name = names.node  # the mapping's <node_name>
+        self.ros_name = names.ros or names.node  # the node's ROS name: its status topic's, diagnostics' name
+        self.namespace = names.namespace
         # Where the mapping's relative and private names resolve: the ROS node's namespace and own name
         # (the mapping's <node_name> may differ, given to a wrapper).
         self._ros_place = (ros_namespace(self.ros_name), self.ros_name.rsplit("/", 1)[-1])
         self.frame_counts = frame_counts or FrameCounts()  # kept across reconnects
-        self._link = link
+        self._link = sim.link
         self.sim = self.make_link(client)
         self.ros = ros or RosLink()
         # Every frame's stamp feeds the time watch; a jump back starts what depends on the old time over.
@@ -94,7 +85,7 @@ class Engine:
         )
         self.hub = StreamHub(self.sim, self.ros.send_tf, on_stamp=self.sim_time.observe)
         self.mounts = CameraMounts()
-        self.services = Services(
+        self.parts = BridgeParts(
             self.sim,
             self.hub,
             self.ros,
@@ -107,15 +98,17 @@ class Engine:
         self._refused: dict[str, str] = {}  # bridges that could not start (ROS refused them): name -> why
         self.scene: Scene | None = None
         self.world: Any = None
-        self.load_world = load_world or load_validated_world
+        self._load_world = sim.load_world
         self.lock = threading.RLock()
-        self._scene_requests: queue.Queue[str | None] = queue.Queue(MAX_QUEUED_SCENES)
-        self._loading: str | None = None  # the scene file being loaded by the scene-loader thread
-        self._refusals = RateLimitedLog(log, REFUSALS_PERIOD_S, REFUSALS_LOGGED, logging.ERROR)
-        self._running = True
-        self.mapping_report: dict[str, Any] = {}  # live reload's state (engine/mapping_reload.py)
-        self.supervisor = Supervisor(self, client_factory)
-        threading.Thread(target=self._scene_loop, name="scene-loader", daemon=True).start()
+        self._scene_requests = SceneRequests(self.load_scene, self._log_bridges)
+        self._mapping_report: dict[str, Any] = {}  # live reload's state (engine/mapping_reload.py)
+        self.supervisor = Supervisor(
+            self, self.lock, sim.client_factory, StatusPublisher(self.ros.publisher, self.ros_name)
+        )
+
+    def start(self) -> None:
+        """Start the scene-loader thread and the supervisor's (health, watchdog, status)."""
+        self._scene_requests.start()
         self.supervisor.start()
 
     # --- the supervisor's state and reports -------------------------------------------------
@@ -189,7 +182,7 @@ class Engine:
             if spec.name not in names:
                 continue
             try:
-                bridge = build(spec, self.services)
+                bridge = build(spec, self.parts)
                 bridge.start()
             except Exception as exc:
                 self._refused[spec.name] = f"{type(exc).__name__}: {exc}"
@@ -259,7 +252,7 @@ class Engine:
             self.hub.drop_all()
             self.sim.forget_all()
             try:
-                self.world = self.load_world(self.client, scene, self.sim_config_path)
+                self.world = self.world_on(self.client, scene)
             except Exception:
                 if self.scene is not None:
                     log.error("loading %s failed; restoring the bridges of %s", scene_file, self.scene.file)
@@ -283,46 +276,12 @@ class Engine:
             self.apply(scene, specs)
 
     def request_scene(self, scene_file: str) -> None:
-        """Queue a scene load (from a ROS callback); it runs on the scene-loader thread. At most
-        MAX_QUEUED_SCENES wait; a request beyond that is refused (EngineError) and logged."""
-        loading = self._loading
-        try:
-            self._scene_requests.put_nowait(scene_file)
-        except queue.Full:
-            self._refusals.warn(
-                f"load_scene {shorten(scene_file)!r} refused: {MAX_QUEUED_SCENES} loads are already waiting"
-                + (f" behind {shorten(loading)!r}" if loading else "")
-            )
-            raise EngineError(f"{MAX_QUEUED_SCENES} scene loads are already waiting") from None
-        if loading is not None:
-            log.info(
-                "load_scene %r queued behind %r (%d waiting)",
-                shorten(scene_file),
-                shorten(loading),
-                self._scene_requests.qsize(),
-            )
+        """Queue a scene load (from a ROS callback); it runs on the scene-loader thread (scene_requests.py).
+        EngineError when too many wait."""
+        self._scene_requests.request(scene_file)
 
-    def _scene_loop(self) -> None:
-        while True:
-            scene_file = self._scene_requests.get()
-            if scene_file is None or not self._running:
-                return
-            self._loading = scene_file
-            try:
-                self.load_scene(scene_file)
-            except ConfigError as exc:
-                report = "\n".join(shorten(line, SHOWN_LINE) for line in str(exc).splitlines())
-                self._refusals.warn(
-                    f"load_scene {shorten(scene_file)!r} refused; the current scene stays:\n{report}"
-                )
-            except Exception as exc:
-                self._refusals.warn(
-                    f"load_scene {shorten(scene_file)!r} failed: {shorten(str(exc), SHOWN_LINE)}"
-                )
-            else:
-                log.info("bridges:\n%s", format_table(self.bridge_specs()))
-            finally:
-                self._loading = None
+    def _log_bridges(self) -> None:
+        log.info("bridges:\n%s", format_table(self.bridge_specs()))
 
     def _node_action(self, action: str, params: dict) -> None:
         """An engine action a bridge asked for, by the name the converter catalogue gives it."""
@@ -331,17 +290,94 @@ class Engine:
             raise ValueError(f"the engine has no action {action!r}")
         actions[action](params)
 
-    # --- the link ---------------------------------------------------------------------------
+    # --- the link: what the supervisor asks of the engine (supervisor.Supervised) ---------------
     def make_link(self, client: Any) -> SimLink:
         """A link on `client` that counts refused frames in this engine's counts (kept across reconnects)."""
         return self._link(client, self.frame_counts)
 
+    def link(self) -> SimLink:
+        """The simulator link the bridges use now."""
+        return self.sim
+
+    def scene_now(self) -> Scene | None:
+        return self.scene
+
+    def world_on(self, client: Any, scene: Scene) -> Any:
+        """Load `scene` into the simulator of `client` (validated first); the client's world of it."""
+        return self._load_world(client, scene, self.sim_config_path)
+
     def swap_link(self, link: SimLink, client: Any, world: Any) -> None:
         """Run every bridge over `link` from now on (under the lock: the supervisor's reconnect). The new
         simulator's clock started over: the old one's stamps no longer say what is stale."""
-        self.client, self.sim, self.services.sim, self.world = client, link, link, world
-        self._start_over()
-        self.hub.rebind(link)
+        with self.lock:
+            self.client, self.sim, self.parts.sim, self.world = client, link, link, world
+            self._start_over()
+            self.hub.rebind(link)
+
+    def move_to(self, link: SimLink, client: Any, world: Any) -> SimLink:
+        """A reconnect: every bridge runs over `link` on `client`, whose simulator already has the scene
+        (`world`); camera mounts moved by commands are forgotten. The old link, for the caller to stop."""
+        with self.lock:
+            old = self.sim
+            self.mounts.clear()
+            self.swap_link(link, client, world)
+        return old
+
+    def revive_link(self) -> None:
+        """The owner of a supplied client says it works again: a new link on the same client."""
+        with self.lock:
+            self.sim.stop_loop()
+            self.swap_link(self.make_link(self.client), self.client, self.world)
+
+    def link_lost(self, abandon: bool) -> None:
+        """The simulator is lost: no robot counts as driven any more, and the link is abandoned (its sockets
+        closed, for a new client) or, when `abandon` is false, only marked dead (the owner's client)."""
+        with self.lock:
+            for command in self.commands():
+                command.moving = False
+            if abandon:
+                self.sim.abandon()
+            else:
+                self.sim.mark_dead()
+
+    def commands(self) -> list[RosToSim]:
+        """The running ROS -> simulator bridges (robots' commands and their watchdogs)."""
+        return [bridge for bridge in list(self.bridges.values()) if isinstance(bridge, RosToSim)]
+
+    def bridge_count(self) -> int:
+        return len(self.bridges)
+
+    def newest_arrival(self) -> float:
+        """When the newest topic frame arrived (monotonic; 0 before any)."""
+        return self.hub.newest_arrival()
+
+    def report(self) -> dict[str, Any]:
+        """The engine's part of the status: the scene, refused frames, sim time, collections, every
+        simulator stream's statistics, the bridges' errors and the mapping's reload state."""
+        errors = {name: b.stats.errors for name, b in list(self.bridges.items()) if b.stats.errors}
+        mapping = self._mapping_report
+        return {
+            "scene": self.scene.file if self.scene else None,
+            "bad_frames": self.frame_counts.bad,
+            "oversized_frames": self.frame_counts.oversized,
+            "callback_errors": self.frame_counts.callback_errors,
+            "sim_time_jumps_back": self.sim_time.jumps_back,
+            "sim_time_last_jump_back_s": round(self.sim_time.last_jump_s, 3),
+            "gc_max_ms": self.gc_pauses.take_peak_ms(),
+            "gc_frozen": self.gc_frozen,  # objects kept out of full collections (freeze_heap)
+            "streams": self.hub.statistics(),
+            "bridge_errors": errors,
+            **({"mapping": mapping} if mapping else {}),
+        }
+
+    @property
+    def mapping_report(self) -> dict[str, Any]:
+        """What live reload last said about the mapping (empty without live reload)."""
+        return self._mapping_report
+
+    def report_mapping(self, report: dict[str, Any]) -> None:
+        """Live reload's state of the mapping, for the status topic and /diagnostics (mapping_reload.py)."""
+        self._mapping_report = report
 
     # --- a new simulator session ------------------------------------------------------------
     def _forget_old_time(self) -> None:
@@ -373,10 +409,8 @@ class Engine:
         client's own subscriptions go too (its owner closes it next). False if the simulator did not
         answer."""
         end = time.monotonic() + timeout
-        self._running = False
+        self._scene_requests.stop()
         self.supervisor.stop()
-        with contextlib.suppress(queue.Full):  # a full queue's loader sees _running false after its load
-            self._scene_requests.put_nowait(None)
         self.sim.begin_close()  # unsubscribes are collected, sent once below
         locked = self.lock.acquire(timeout=max(0.0, (end - time.monotonic()) / 2))
         try:
