@@ -3,11 +3,12 @@
 Data flows one way: scene + mapping --expand--> BridgeSpecs --build--> runners wired to the sim link and
 the ROS link. The node's own bridges (load_scene) start before any scene (`start_node_bridges`) and keep
 running, untouched, across scene changes; a scene change tears the scene's runners down and builds the new
-scene's. Scene requests from ROS wait in a short queue for the scene-loader thread.
+scene's. Scene requests from ROS wait in a short queue for the scene-loader thread (scene_requests.py).
 
-The engine owns the bridges, the scene and the link; its supervisor (supervisor.py) watches the link's
-health, reconnects, runs the command watchdog and publishes the status. Both change the bridges and the
-link under the engine's one lock (`Engine.lock`).
+The engine owns the bridges, the scene and the link, and the one lock they change under. Its supervisor
+(supervisor.py) owns the connection state: it watches the link's health, reconnects, runs the command
+watchdog and publishes the status, asking the engine through the methods `supervisor.Supervised` names;
+it is given the engine's lock, since its state changes with the link and the bridges.
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ class Engine:
         tune: bool = False,
     ) -> None:
         if tune:
-            tune_process()  # before any topic is made: rospy's connections are chosen as topics connect
+            tune_process()
         self._freeze_heap = tune  # gc.freeze is process-wide: only for a process that asked for tuning
         self.gc_pauses = GcPauses()
         self.gc_frozen = 0
