@@ -132,7 +132,9 @@ class ProjectAirSimWrapper:
         )
         self.engine.start()
         self.master_watch = MasterWatch()
+        self.master_watch.start()
         self.diagnostics = Diagnostics(self.engine, ros_name)
+        self.diagnostics.start()
         self._closed = False
         rospy.on_shutdown(self.shutdown)
         self.engine.start_node_bridges()  # load_scene is there before (and without) any scene

@@ -89,7 +89,7 @@ def refused_status(name: str, why: str, prefix: str) -> dict[str, Any]:
 
 
 class Diagnostics:
-    """Publishes the engine's bridge statistics on /diagnostics until stopped."""
+    """Publishes the engine's bridge statistics on /diagnostics from `start` until stopped."""
 
     def __init__(self, engine: Any, node_name: str, period_s: float = 1.0) -> None:
         import rospy
@@ -102,6 +102,8 @@ class Diagnostics:
         self._seen: dict[str, _Seen] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="diagnostics", daemon=True)
+
+    def start(self) -> None:
         self._thread.start()
 
     def statuses(self, now: float) -> list[dict[str, Any]]:
@@ -191,5 +193,6 @@ class Diagnostics:
 
     def stop(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=2)
+        if self._thread.is_alive():
+            self._thread.join(timeout=2)
         self.publisher.unregister()

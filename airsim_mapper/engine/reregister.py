@@ -97,8 +97,8 @@ def needs_registration(known: bool | None, pid: int | None, last_pid: int | None
 
 
 class MasterWatch:
-    """A thread that re-registers this node whenever a new master answers (it does not know the node,
-    or its pid changed)."""
+    """A thread, from `start`, that re-registers this node whenever a new master answers (it does not
+    know the node, or its pid changed)."""
 
     def __init__(
         self, period: float = POLL_PERIOD_S, on_reregistered: Callable[[Registered], None] | None = None
@@ -117,6 +117,8 @@ class MasterWatch:
         answer = ask_master(self._master, self.caller_id, self.node_uri)
         self._pid = None if answer is None else answer[1]  # the master this node registered with
         self._thread = threading.Thread(target=self._run, name="master-watch", daemon=True)
+
+    def start(self) -> None:
         self._thread.start()
 
     def _new_master(self) -> int | None:
@@ -146,7 +148,7 @@ class MasterWatch:
 
     def stop(self) -> None:
         self._stop.set()
-        if threading.current_thread() is not self._thread:
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
             self._thread.join(timeout=5)
 
 
