@@ -79,7 +79,7 @@ class ProjectAirSimWrapper:
 
     The wrapper fixes glibc's malloc thresholds, so that image frames are not returned to the kernel and
     faulted back in on every frame (`tuning.keep_frame_buffers`; AIRSIM_MAPPER_NO_TUNING=1 leaves them),
-    and lets the node's TCPROS port queue 128 new connections, not 5 (`ros_link.widen_accept_backlog`).
+    and lets the node's TCPROS port queue 128 new connections, not 5 (`rospy_internals.widen_accept_backlog`).
     Beyond that it changes nothing process-wide unless asked: with `tune_process=True` (what the node does)
     it limits numpy's OpenBLAS to one thread, lowers the interpreter's switch interval to 0.5 ms, makes
     every rospy publisher of the process send on the publishing thread when the socket takes the message

@@ -3,19 +3,17 @@ subscribers, services, the clock) and batched tf."""
 
 from __future__ import annotations
 
-import contextlib
 import importlib
-import select
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 import rospy
-import rospy.topics
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.engine.rospy_internals import widen_accept_backlog
 from airsim_mapper.logs import shorten
 from airsim_mapper.ros_types import generated_kind
 
@@ -103,30 +101,6 @@ class StaticTf:
         self._publisher.publish(TFMessage(list(self._transforms.values())))
 
 
-ACCEPT_BACKLOG = 128  # connections the node's TCPROS port queues while it handles one
-
-
-def widen_accept_backlog(backlog: int = ACCEPT_BACKLOG) -> None:
-    """Let the node's TCPROS port queue `backlog` new connections instead of rospy's 5.
-
-    rospy's TCPROS server listens with a backlog of 5 and reads each new connection's header on its one
-    accept thread. A subscriber of many topics at once (`rosbag record` of ten topics, rviz) connects to
-    them all within milliseconds: the kernel dropped the connections beyond the fifth and their clients
-    retried a second later, so those topics started 1 s late. Listening again on the same socket only
-    changes its queue. The server is started first, as rospy does at the first publisher or service; before
-    `init_node` (which sets its port) and after shutdown (which closes it) nothing is done."""
-    from rospy.impl import tcpros_base
-
-    if not rospy.core.is_initialized() or rospy.is_shutdown():
-        return
-    tcpros_base.start_tcpros_server()
-    server = getattr(tcpros_base._tcpros_server, "tcp_ros_server", None)
-    sock = getattr(server, "server_sock", None)
-    if sock is not None:
-        with contextlib.suppress(OSError):  # closed by a shutdown meanwhile
-            sock.listen(backlog)
-
-
 def publisher(
     name: str,
     ros_type: str,
@@ -196,45 +170,6 @@ class RosLink:
 
     def close(self) -> None:
         self.frames.close()
-
-
-class ConnectionPoll(rospy.topics.Poller):
-    """rospy's per-topic watch for dead connections, on poll(2) instead of an epoll: no open file per topic.
-
-    rospy gives every topic an epoll object and never closes it; it goes only when the topic is collected,
-    which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
-    1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
-    `process_tuning.tune_process` installs it for every topic made afterwards, with the frozen heap.
-
-    It watches what rospy's epoll watches: an error, a hang-up, and the peer's half-close (POLLRDHUP, the
-    FIN of a closed peer). rospy's own poll(2) fallback misses the half-close, so a connection whose peer
-    had just gone stayed listed; a new publisher at the same node URI then found it, took itself for
-    connected (`has_connection`) and was never connected. The methods sit on the class: rospy keeps
-    bound methods on the instance, a cycle that outlives the topic in a frozen heap.
-    """
-
-    _WATCH = select.POLLRDHUP  # POLLHUP and POLLERR are reported whatever the mask
-    _GONE = select.POLLHUP | select.POLLERR | select.POLLRDHUP
-
-    def __init__(self) -> None:
-        self.poller = select.poll()
-        # rospy polls from its registration thread (`check`, unlocked) and under the topic's lock when a
-        # connection is added; epoll allows that, but a poll object raises on a concurrent poll().
-        self._lock = threading.Lock()
-
-    def add_fd(self, fd: int) -> None:
-        with self._lock:
-            self.poller.register(fd, self._WATCH)
-
-    def remove_fd(self, fd: int) -> None:
-        with self._lock:
-            self.poller.unregister(fd)
-
-    def error_iter(self) -> Iterator[int]:
-        """The watched descriptors whose connection has ended."""
-        with self._lock:
-            events = self.poller.poll(0)
-        return (fd for fd, event in events if event & self._GONE)
 
 
 def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:

@@ -3,21 +3,26 @@
 rospy's queued publisher connection (`rospy.impl.tcpros_pubsub.QueuedConnection`) hands every message to
 a writer thread; `PromptQueuedConnection` subclasses it to send on the publishing thread when it can, and
 so relies on its private state (`_lock`, `_cond_data_available`, `_queue`, `_queue_size`, `_error`,
-`_connection`, `_run`). `publish_promptly` and `watch_connections_without_a_file` put the bridge's classes
-in place of rospy's in `rospy.topics`. `missing_internals` says what of this is gone in the installed rospy.
+`_connection`, `_run`). `ConnectionPoll` replaces rospy's per-topic `rospy.topics.Poller`;
+`publish_promptly` and `watch_connections_without_a_file` put the two in place of rospy's in
+`rospy.topics`. `widen_accept_backlog` reaches rospy's private TCPROS server (`tcpros_base._tcpros_server`).
+`missing_internals` says what of this is gone in the installed rospy.
 """
 
 from __future__ import annotations
 
+import contextlib
 import re
+import select
 import socket
 import threading
+from collections.abc import Iterator
 
+import rospy
 import rospy.topics
 from rospy.impl.tcpros_pubsub import QueuedConnection
 
 from airsim_mapper.convert.buffer_data import Part
-from airsim_mapper.engine.ros_link import ConnectionPoll
 
 PINNED = "Debian 12's rospy (python3-rospy 1.15.15)"
 QUEUE_STATE = ("_connection", "_queue_size", "_lock", "_cond_data_available", "_queue", "_error")
@@ -148,13 +153,76 @@ class WakeOnClose:
             self._data_available.notify()
 
 
+class ConnectionPoll(rospy.topics.Poller):
+    """rospy's per-topic watch for dead connections, on poll(2) instead of an epoll: no open file per topic.
+
+    rospy gives every topic an epoll object and never closes it; it goes only when the topic is collected,
+    which a frozen heap (`freeze_heap`) delays for good. So each topic held an open file (a robot with
+    1,000 IMUs hit `ulimit -n 1024`) and each restarted one leaked it (every live mapping reload).
+    `process_tuning.tune_process` installs it for every topic made afterwards, with the frozen heap.
+
+    It watches what rospy's epoll watches: an error, a hang-up, and the peer's half-close (POLLRDHUP, the
+    FIN of a closed peer). rospy's own poll(2) fallback misses the half-close, so a connection whose peer
+    had just gone stayed listed; a new publisher at the same node URI then found it, took itself for
+    connected (`has_connection`) and was never connected. The methods sit on the class: rospy keeps
+    bound methods on the instance, a cycle that outlives the topic in a frozen heap.
+    """
+
+    _WATCH = select.POLLRDHUP  # POLLHUP and POLLERR are reported whatever the mask
+    _GONE = select.POLLHUP | select.POLLERR | select.POLLRDHUP
+
+    def __init__(self) -> None:
+        self.poller = select.poll()
+        # rospy polls from its registration thread (`check`, unlocked) and under the topic's lock when a
+        # connection is added; epoll allows that, but a poll object raises on a concurrent poll().
+        self._lock = threading.Lock()
+
+    def add_fd(self, fd: int) -> None:
+        with self._lock:
+            self.poller.register(fd, self._WATCH)
+
+    def remove_fd(self, fd: int) -> None:
+        with self._lock:
+            self.poller.unregister(fd)
+
+    def error_iter(self) -> Iterator[int]:
+        """The watched descriptors whose connection has ended."""
+        with self._lock:
+            events = self.poller.poll(0)
+        return (fd for fd, event in events if event & self._GONE)
+
+
+ACCEPT_BACKLOG = 128  # connections the node's TCPROS port queues while it handles one
+
+
+def widen_accept_backlog(backlog: int = ACCEPT_BACKLOG) -> None:
+    """Let the node's TCPROS port queue `backlog` new connections instead of rospy's 5.
+
+    rospy's TCPROS server listens with a backlog of 5 and reads each new connection's header on its one
+    accept thread. A subscriber of many topics at once (`rosbag record` of ten topics, rviz) connects to
+    them all within milliseconds: the kernel dropped the connections beyond the fifth and their clients
+    retried a second later, so those topics started 1 s late. Listening again on the same socket only
+    changes its queue. The server is started first, as rospy does at the first publisher or service; before
+    `init_node` (which sets its port) and after shutdown (which closes it) nothing is done."""
+    from rospy.impl import tcpros_base
+
+    if not rospy.core.is_initialized() or rospy.is_shutdown():
+        return
+    tcpros_base.start_tcpros_server()
+    server = getattr(tcpros_base._tcpros_server, "tcp_ros_server", None)
+    sock = getattr(server, "server_sock", None)
+    if sock is not None:
+        with contextlib.suppress(OSError):  # closed by a shutdown meanwhile
+            sock.listen(backlog)
+
+
 def publish_promptly() -> None:
     """Every rospy publisher connection made from now on is a `PromptQueuedConnection`."""
     rospy.topics.QueuedConnection = PromptQueuedConnection
 
 
 def watch_connections_without_a_file() -> None:
-    """rospy's topics made from now on watch their connections with `ConnectionPoll` (ros_link.py)."""
+    """rospy's topics made from now on watch their connections with `ConnectionPoll`."""
     rospy.topics.Poller = ConnectionPoll
 
 
@@ -167,6 +235,10 @@ def missing_internals() -> list[str]:
     ]
     if not callable(getattr(QueuedConnection, "_run", None)):
         missing.append("QueuedConnection._run")
+    from rospy.impl import tcpros_base
+
+    if not hasattr(tcpros_base, "_tcpros_server"):
+        missing.append("rospy.impl.tcpros_base._tcpros_server")
     made = inspect.getsource(QueuedConnection.__init__)
     missing.extend(
         f"QueuedConnection.{name}" for name in QUEUE_STATE if not re.search(rf"self\.{name}\s*=", made)

@@ -11,7 +11,7 @@ import pytest
 import rospy.topics
 from std_msgs.msg import Empty
 
-from airsim_mapper.engine.ros_link import ConnectionPoll
+from airsim_mapper.engine.rospy_internals import ConnectionPoll
 
 
 @contextmanager

@@ -14,8 +14,7 @@ import pytest
 from fakes import EngineRig
 from harness import SIM_CONFIG
 
-from airsim_mapper.engine.ros_link import ConnectionPoll
-from airsim_mapper.engine.rospy_internals import PromptQueuedConnection
+from airsim_mapper.engine.rospy_internals import ConnectionPoll, PromptQueuedConnection
 from airsim_mapper.mapping.loader import load_mapping_text
 
 SCENE = "scene_drone_sensors.jsonc"
