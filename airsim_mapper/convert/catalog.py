@@ -43,6 +43,9 @@ SIM_KINDS = {PUBLISH: "topic", SEND: "topic", CALL: "service", SERVE: "service",
 # What runs after a successful simulator call (engine/bridges.py AFTER_HOOKS), and the engine's actions.
 AFTER_HOOKS = ("remember_camera_pose", "next_streaming_camera")
 ACTIONS = ("load_scene",)
+# What an image-encoding converter takes (`image_kind`): 8-bit colour/mono images, or float depth images
+# (image_types.FLOAT_IMAGE_TYPES); the expansion refuses a bridge of it on the other kind.
+COLOUR, FLOAT = "colour", "float"
 
 
 @dataclass(frozen=True)
@@ -73,6 +76,8 @@ class ConverterInfo:
     required_params: Mapping[str, str] = field(default_factory=dict)
     # params with a fixed set of values: each value with the simulator method it goes with ("" for any)
     param_choices: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
+    # the only images it can encode: COLOUR (8-bit) or FLOAT (depth) image types; None: any
+    image_kind: str | None = None
 
     @property
     def sim_kind(self) -> str:
@@ -194,6 +199,34 @@ CONVERTERS: dict[str, ConverterInfo] = {
             "format 'bgr8; png compressed bgr8' (image_transport's compressed transport)",
             example=_e({**STAMP, "width": 1, "height": 1, "encoding": "PNG", "data": PNG_1X1}),
             max_pixels=True,
+        ),
+        # image_transport's sibling topics, encoded here (convert/encoded_image.py)
+        _c(
+            "image_compressed",
+            SIM_TO_ROS,
+            ["sensor_msgs/CompressedImage"],
+            PUBLISH,
+            "encoded_image",
+            "image_compressed",
+            "sim colour Image -> CompressedImage as image_transport's compressed transport writes it: "
+            "params.format jpeg (jpeg_quality, default 80) or png (png_level, default 9)",
+            example=_e({**STAMP, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)}),
+            max_pixels=True,
+            param_choices={"format": {"jpeg": "", "png": ""}},  # the default first
+            image_kind=COLOUR,
+        ),
+        _c(
+            "image_compressed_depth",
+            SIM_TO_ROS,
+            ["sensor_msgs/CompressedImage"],
+            PUBLISH,
+            "encoded_image",
+            "image_compressed_depth",
+            "sim depth Image -> CompressedImage as image_transport's compressedDepth transport writes it "
+            "(quantised inverse depth in a 16-bit PNG: depth_max, depth_quantization, png_level)",
+            example=_e({**STAMP, "width": 1, "height": 1, "encoding": "16FC1", "data": bytes(2)}),
+            max_pixels=True,
+            image_kind=FLOAT,
         ),
         _c(
             "camera_info",

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.convert.errors import ConversionError
 
 # compressed_image_transport's dynamic-reconfigure defaults and ranges (CompressedPublisher.cfg)
 JPEG = "jpeg"
@@ -55,7 +55,7 @@ COLOUR_ENCODINGS = {"bgr8": 8, "rgb8": 8, "bgra8": 8, "rgba8": 8, "bgr16": 16, "
 MONO_ENCODINGS = {"mono8": 8, "mono16": 16, "8UC1": 8, "16UC1": 16}
 
 
-class EncodingFailed(AirsimMapperError, ValueError):
+class EncodingFailed(ConversionError):
     """The encoder refused an image (an encoding the transport cannot carry, or a library failure)."""
 
 

@@ -59,8 +59,8 @@ def test_topics_prints_one_markdown_row_per_bridge_with_ros_type_direction_sim_f
     header = lines.index("| ROS name | type | direction | simulator | frame | bridge |")
     assert lines[header + 1] == "|---|---|---|---|---|---|"
     rows = lines[header + 2 :]
-    assert "73 bridges: 38 topics, 16 services, 19 tf-only." in out
-    assert len(rows) == 73
+    assert "81 bridges: 46 topics, 16 services, 19 tf-only." in out
+    assert len(rows) == 81
     assert (
         "| `/airsim_node/Drone1/actual_pose` | `geometry_msgs/PoseStamped` | sim → ROS | "
         "`/Sim/SceneDroneSensors/robots/Drone1/actual_pose` | `map`; tf `map` → `Drone1/base_link` | "
