@@ -3,6 +3,10 @@
 
 Run: .venv/bin/python -m tools.bench.encoders [--repeat N]
 
+Then the bridge's own converters on the same frames, as the simulator sends them (BGR, float16 depth): CPU
+per frame over the library's own encode of the same pixels in the same run, and the bytes on the wire per
+transport (the serialised ROS message: raw Image, compressed JPEG and PNG, compressedDepth).
+
 The colour frame is a rendered-looking scene (sky gradient, textured ground, boxes, sensor noise); the depth
 frame is a ground plane with boxes, 1 to 200 m, quantised as compressed_depth_image_transport does before
 its 16-bit PNG. Libraries not installed are left out (simplejpeg is not a dependency: install it
@@ -12,6 +16,7 @@ beside the venv to compare, e.g. `pip install --target /tmp/sj simplejpeg` and P
 from __future__ import annotations
 
 import argparse
+import functools
 import io
 import statistics
 import time
@@ -90,15 +95,77 @@ def candidates(bgr: np.ndarray, inverse: np.ndarray) -> dict[str, Callable[[], b
     return found
 
 
-def cpu_ms(encode: Callable[[], bytes], repeat: int) -> tuple[float, int]:
-    """(median thread CPU ms, output bytes) over `repeat` encodes after one warm-up."""
-    size = len(encode())
+def cpu_ms(encode: Callable[[], object], repeat: int) -> tuple[float, object]:
+    """(median thread CPU ms, the output) over `repeat` encodes after one warm-up."""
+    out = encode()
     times = []
     for _ in range(repeat):
         start = time.thread_time()
         encode()
         times.append((time.thread_time() - start) * 1e3)
-    return statistics.median(times), size
+    return statistics.median(times), out
+
+
+def paired_ms(first: Callable[[], object], second: Callable[[], object], repeat: int) -> tuple[float, float]:
+    """Median thread CPU ms of two callables run alternately, so that both see the same host."""
+    first(), second()
+    times: tuple[list[float], list[float]] = ([], [])
+    for _ in range(repeat):
+        for fn, kept in ((first, times[0]), (second, times[1])):
+            start = time.thread_time()
+            fn()
+            kept.append((time.thread_time() - start) * 1e3)
+    return statistics.median(times[0]), statistics.median(times[1])
+
+
+def wire_bytes(message: object) -> int:
+    buffer = io.BytesIO()
+    message.serialize(buffer)
+    return len(buffer.getvalue())
+
+
+def converter_rows(bgr: np.ndarray, depth: np.ndarray, repeat: int) -> None:
+    """The converters' CPU per frame against the library's own encode of the same pixels, and the bytes
+    each transport puts on the wire."""
+    from airsim_mapper.convert import image_transport, registry
+    from airsim_mapper.convert.context import ConvertContext
+
+    half = depth.astype("<f2")
+    colour_msg = {"time_stamp": 1, "width": W, "height": H, "encoding": "BGR", "data": bgr.tobytes()}
+    depth_msg = {"time_stamp": 1, "width": W, "height": H, "encoding": "16FC1", "data": half.tobytes()}
+    metres = half.astype(np.float32)
+    params = {"depth_max": 100.0, "depth_quantization": 100.0, "png_level": PNG_LEVEL}
+    rows = [
+        ("raw Image bgr8", "image", colour_msg, {}, None),
+        ("raw Image 32FC1", "image", depth_msg, {}, None),
+        ("compressed jpeg", "image_compressed", colour_msg, {}, lambda: image_transport.encode_jpeg(bgr)),
+        (
+            "compressed png",
+            "image_compressed",
+            colour_msg,
+            {"format": "png", "png_level": PNG_LEVEL},
+            lambda: image_transport.encode_png(bgr, PNG_LEVEL),
+        ),
+        (
+            "compressedDepth",
+            "image_compressed_depth",
+            depth_msg,
+            params,
+            lambda: image_transport.compressed_depth(metres, 100.0, 100.0, PNG_LEVEL).data,
+        ),
+    ]
+    print(f"\n{'transport':<22} {'converter ms':>12} {'library ms':>10} {'ratio':>6} {'wire bytes':>11}")
+    for name, converter, message, rule_params, library in rows:
+        convert = registry.get(converter)
+        ctx = ConvertContext(frame_id="bench", params=rule_params)
+        size = wire_bytes(convert(message, ctx))
+        run = functools.partial(convert, message, ctx)
+        if library is None:
+            ms, _out = cpu_ms(run, repeat)
+            print(f"{name:<22} {ms:12.2f} {'':>10} {'':>6} {size:11d}")
+            continue
+        ms, own = paired_ms(run, library, repeat)
+        print(f"{name:<22} {ms:12.2f} {own:10.2f} {ms / own:6.2f} {size:11d}")
 
 
 def main() -> None:
@@ -117,9 +184,10 @@ def main() -> None:
     print(f"1080p frames; raw bgr8 {bgr.nbytes} bytes, raw 32FC1 {W * H * 4} bytes")
     print(f"{'encoder':<26} {'CPU ms':>8} {'bytes':>10}")
     for name, encode in candidates(bgr, inverse).items():
-        ms, size = cpu_ms(encode, args.repeat)
-        print(f"{name:<26} {ms:8.2f} {size:10d}")
+        ms, out = cpu_ms(encode, args.repeat)
+        print(f"{name:<26} {ms:8.2f} {len(out):10d}")
     print(f"{'depth quantisation':<26} {quantise_ms:8.2f}")
+    converter_rows(bgr, depth, args.repeat)
 
 
 if __name__ == "__main__":
