@@ -51,8 +51,9 @@ PNG_IHDR = struct.Struct(">IIBBBBB")  # width, height, bit depth, colour type, c
 CONFIG_HEADER = struct.Struct("<iff")  # ConfigHeader: compressionFormat format; float depthParam[2]
 INV_DEPTH = 0  # compressionFormat's INV_DEPTH
 DEPTH_FORMAT = "32FC1; compressedDepth png"
-COLOUR_ENCODINGS = {"bgr8": 8, "rgb8": 8, "bgra8": 8, "rgba8": 8, "bgr16": 16, "rgb16": 16}
-MONO_ENCODINGS = {"mono8": 8, "mono16": 16, "8UC1": 8, "16UC1": 16}
+# the encodings taken, as pixels already in the order the plugin converts to (B, G, R), with their bits
+COLOUR_ENCODINGS = {"bgr8": 8, "bgr16": 16}
+MONO_ENCODINGS = {"mono8": 8, "mono16": 16}
 
 
 class EncodingFailed(ConversionError):

@@ -123,3 +123,29 @@ def test_compressed_depth_restores_the_raw_depth_within_the_quantisation(rig: St
     near, far = depth[valid], restored[valid]
     assert (far >= near - 1e-4).all()
     assert (far - near <= far**2 / a * 1.001 + 1e-4).all()  # at most one step, d^2 / A, further away
+
+
+def test_format_png_is_the_raw_image_exactly(rig_factory, tmp_path):
+    from sensor_msgs.msg import Image
+
+    mapping = tmp_path / "png.yaml"
+    mapping.write_text(
+        "version: 1\nextends: default\nrules:\n"
+        "  - {name: camera_image_compressed, params: {format: png, png_level: 1}}\n"
+    )
+    stack = rig_factory()  # in its own namespace: the module's node serves the default names meanwhile
+    stack.start_node(
+        "--scene",
+        "scene_drone_sensors.jsonc",
+        "--mapping",
+        str(mapping),
+        "--namespace",
+        "png",
+        node_name="png_bridge",
+        wait_for=f"/png{DEPTH}",
+    )
+    raw, compressed = same_stamp(f"/png{COLOUR}", Image, f"/png{COLOUR}/compressed")
+    assert compressed.format == "bgr8; png compressed bgr8"
+    decoded = cv2.imdecode(np.frombuffer(compressed.data, np.uint8), cv2.IMREAD_UNCHANGED)
+    pixels = np.frombuffer(raw.data, np.uint8).reshape(raw.height, raw.width, 3)
+    np.testing.assert_array_equal(decoded, pixels)
