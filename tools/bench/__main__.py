@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from tools import camera_probe
-from tools.bench import costs, renderers, report, sampling, scenes
+from tools.bench import costs, renderers, report, sampling, scenes, transports
 from tools.bench.e2e import Bench, rotated
 
 CAMERA_HZ, LIDAR_HZ, POSE_HZ, SCALE_CAMERA_HZ = 30.0, scenes.LIDAR_HZ, 100.0, 10.0
@@ -123,6 +123,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
     out["pose"]["waiting"] = bench.waiting_node()  # no scene: nothing arrives, nothing is published
     with bench.bridge_session(single, profile=profile("depth")) as session:
         out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
+    out["transports"] = transports.run(bench, single)  # image_transport's compressed topics subscribed
     with bench.bridge_session(single, profile=profile("lidar")) as session:
         out["bridge"]["lidar"] = session.probe("lidar", [scenes.lidar_topic(1)])
     with bench.bridge_session(single, decode="client") as session:
@@ -209,6 +210,8 @@ def main(argv: list[str] | None = None) -> int:
         results["machine"]["windows_retaken"] = bench.windows_retaken
         results["workdir"] = str(workdir)
         print(report.e2e_table(results["e2e"]), flush=True)
+        raw = {key: results["e2e"]["bridge"][key] for key in ("camera", "depth")}
+        print(transports.table(results["e2e"]["transports"], raw), flush=True)
     results["targets"] = report.targets(results)
     results["seconds"] = time.monotonic() - started
     results["machine"]["load_average_at_end"] = os.getloadavg()[0]
