@@ -35,7 +35,7 @@ from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world_file import load_world
 
 WIDTH, HEIGHT, HZ = 1280, 720, 30.0
-TARGET_HZ = 30.0  # issue: all seven types of one 1280x720 camera at 30 Hz on 2 cores (llvmpipe)
+TARGET_HZ = 30.0  # target: all seven types of one 1280x720 camera at 30 Hz on 2 cores (llvmpipe)
 
 
 def probe_scene(width: int, height: int, hz: float) -> dict[str, Any]:

@@ -232,8 +232,8 @@ class Engine:
                     log.exception("stopping %s failed", name)
             self._start_bridges(specs, {*diff.added, *diff.changed})
             if self._freeze_heap:
-                # No full collection here (freeze_heap's would stop every running bridge for tens of ms, and
-                # 50-130 ms on a busy machine): the new objects join the frozen heap as they are. The stopped
+                # No full collection here (freeze_heap's would stop every running bridge while it walks the
+                # whole heap): the new objects join the frozen heap as they are. The stopped
                 # bridges were freed by reference counting as they stopped: they hold no reference cycle
                 # (tests/engine/test_freed_on_stop.py; a cycle frozen here would stay for good).
                 gc.freeze()

@@ -22,7 +22,7 @@ The child renders with `rendering.render`, so with OpenGL by default: its EGL co
 live in the child, at its priority, made on its first render (docs/rendering.md).
 
 It starts on the first render, is replaced if it dies or hangs, and exits when the server closes its end
-or dies. In a session of its own it no longer receives the signals a terminal or a supervisor sends to
+or dies. In a session of its own it does not receive the signals a terminal or a supervisor sends to
 the server's process group; it ignores SIGINT and SIGTERM anyway, so a stopping server never loses its
 renderer first. A child that fails before its first answer
 (it cannot be started, or cannot import) is reported once, and the server then renders in its own

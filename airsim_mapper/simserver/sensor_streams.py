@@ -36,8 +36,8 @@ from airsim_mapper.simserver.world import World
 
 LOG = logging.getLogger("airsim_mapper.simserver.sensor_streams")
 
-# Between reports a lidar scans segments of at least this much sim time: one per 3 ms tick cost the server
-# about a tenth of a core in numpy call overhead, and the report carries the same points either way.
+# Between reports a lidar scans segments of at least this much sim time: a segment per physics tick would
+# spend much of the server's time in numpy's per-call overhead; the report carries the same points.
 LIDAR_MIN_SEGMENT_NS = 20_000_000
 
 
