@@ -404,7 +404,7 @@ def _pose_cpu_ratio(ours: dict[str, Any], floor: dict[str, Any], per_probe: bool
     With `per_probe`, where both windows have their probe's CPU, each node's CPU is taken over its probe's:
     the probe reads the same messages at the same rate from either node, so its CPU follows only how fast
     the host ran during that window, which moves small CPU figures between windows far more than anything
-    the nodes do differently (docs/performance.md, "The host's speed in each window")."""
+    the nodes do differently (docs/performance.md, "Reading the figures")."""
     probes = ours.get("probe_cpu_cores"), floor.get("probe_cpu_cores")
     if per_probe and all(probes):
         return _ratio(ours["bridge_cpu_cores"] / probes[0], floor["forwarder_cpu_cores"] / probes[1])
