@@ -15,7 +15,7 @@ message (`example`) that the property tests convert and then damage in every way
 
 The catalogue is the one source of the converters' names: the mapping schema's `converter` enum and the
 table in `docs/converters.md` are generated from it (`python -m tools.catalogue`), and tests name any entry
-either lacks. `markdown_table` renders the catalogue for people (`airsim-mapper converters` prints it).
+either lacks. `converters_markdown` renders the catalogue for people (`airsim-mapper converters` prints it).
 
 The entries live in `airsim_mapper.convert.entries`, one module a family (poses, cameras, lidar and radar,
 instruments, commands, services); this module puts them in catalogue order, the order of the schema's
@@ -58,8 +58,8 @@ __all__ = [
     "SIM_TO_ROS",
     "STREAM",
     "ConverterInfo",
+    "converters_markdown",
     "find",
-    "markdown_table",
     "runs_on",
 ]
 
@@ -94,7 +94,7 @@ def runs_on(info: ConverterInfo) -> str:
     return "receive thread" if info.inline else "its topic's worker"
 
 
-def markdown_table(converters: Iterable[ConverterInfo] | None = None) -> str:
+def converters_markdown(converters: Iterable[ConverterInfo] | None = None) -> str:
     """The converters (default: the whole catalogue, in its order) as a Markdown table, one row each."""
     rows = [
         (

@@ -12,7 +12,7 @@ POSES = (
         ["geometry_msgs/PoseStamped"],
         PUBLISH,
         "pose",
-        "pose_stamped",
+        "robot_pose",
         "sim PoseStamped (robot actual_pose) -> PoseStamped; with tf, also the robot's transform",
         inline=True,
         example=Example({**STAMP, **POSE}),
