@@ -16,7 +16,7 @@ from pathlib import Path
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.expand import selected
 from airsim_mapper.mapping.match import describe
-from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
 from airsim_mapper.resources import mapping_path, sim_config_dir
@@ -149,7 +149,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def match_report(
-    mapping: Mapping, scene: Scene, node_name: str, namespace: str
+    mapping: MappingDoc, scene: Scene, node_name: str, namespace: str
 ) -> tuple[list[str], list[str]]:
     """What each rule's `match` selected in `scene` (one line a rule), and a warning for each rule whose
     `match` selects nothing there (FILE:LINE: warning: ...)."""
