@@ -14,13 +14,13 @@ import sys
 from collections.abc import Sequence
 from typing import TextIO
 
+from airsim_mapper.cli.arguments import EXIT_INVALID, EXIT_OK, EXIT_USAGE, MAPPING_HELP, add_scene_arguments
 from airsim_mapper.convert import catalog
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.resources import ros_setup_file, sim_config_dir
 
-EXIT_OK, EXIT_INVALID, EXIT_USAGE = 0, 1, 2
 HEADERS = ("ROS name", "type", "direction", "simulator", "frame", "bridge")
 
 
@@ -30,17 +30,9 @@ def _parser() -> argparse.ArgumentParser:
     topics = commands.add_parser(
         "topics", help="print the ROS interface a mapping makes for a scene, as a Markdown table"
     )
-    topics.add_argument(
-        "--mapping", required=True, help="the mapping YAML file, or a shipped mapping's name (default, enu)"
-    )
+    topics.add_argument("--mapping", required=True, help=MAPPING_HELP)
     topics.add_argument("--scene", required=True, help="a scene config file name inside --simconfigpath")
-    topics.add_argument(
-        "--simconfigpath",
-        default=None,
-        help="the scene config directory (default: ./sim_config/, else the package's sample scenes)",
-    )
-    topics.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
-    topics.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
+    add_scene_arguments(topics)
     commands.add_parser("converters", help="print the converters a mapping may name, as a Markdown table")
     commands.add_parser(
         "ros-setup",

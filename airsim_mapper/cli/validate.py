@@ -13,6 +13,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from airsim_mapper.cli.arguments import EXIT_INVALID, EXIT_OK, EXIT_USAGE, MAPPING_HELP, add_scene_arguments
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.expand import selected
 from airsim_mapper.mapping.match import describe
@@ -24,15 +25,13 @@ from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
 
-EXIT_OK, EXIT_INVALID, EXIT_USAGE = 0, 1, 2
-
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="validate-mapping",
         description="Validate an airsim-mapper mapping YAML (and expand it over a scene).",
     )
-    parser.add_argument("mapping", help="the mapping YAML file, or a shipped mapping's name (default, enu)")
+    parser.add_argument("mapping", help=MAPPING_HELP)
     parser.add_argument(
         "new",
         nargs="?",
@@ -40,13 +39,7 @@ def _parser() -> argparse.ArgumentParser:
         "running node's live reload would do)",
     )
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
-    parser.add_argument(
-        "--simconfigpath",
-        default=None,
-        help="the scene config directory (default: ./sim_config/, else the package's sample scenes)",
-    )
-    parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
-    parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
+    add_scene_arguments(parser)
     parser.add_argument(
         "--format",
         choices=("text", "json"),
