@@ -8,13 +8,13 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
+from harness import ROOT, SIM_CONFIG
 
 from airsim_mapper.cli.node import SETTINGS, SettingError, given_settings, parse_args, resolve_settings
 from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 
-LAUNCH = Path(__file__).resolve().parent.parent / "launch"
-SIM_CONFIG = Path(__file__).resolve().parent.parent / "sim_config"
+LAUNCH = ROOT / "launch"
 # launch defaults that differ from the node's on purpose: roslaunch finds the package's own sim_config
 LAUNCH_OWN_DEFAULTS = {"simconfigpath": "$(find projectairsim_ros)/sim_config"}
 
@@ -69,7 +69,7 @@ def test_a_port_out_of_range_is_refused_as_a_switch_and_as_a_parameter(value, ca
 def test_the_default_sim_config_falls_back_to_the_package_s_own(tmp_path, monkeypatch) -> None:
     monkeypatch.chdir(tmp_path)  # rosrun from $HOME: no ./sim_config
     resolved = resolve_settings(given([]), params())["simconfigpath"]
-    assert Path(resolved.value) == Path(__file__).resolve().parent.parent / "sim_config"
+    assert Path(resolved.value) == SIM_CONFIG
     assert "does not exist here, so the package's own" in resolved.source
     explicit = resolve_settings(given(["--simconfigpath", "sim_config/"]), params())["simconfigpath"]
     assert explicit.value == "sim_config/"  # given on purpose: kept, and its absence reported later
