@@ -14,12 +14,19 @@ import sys
 from collections.abc import Sequence
 from typing import TextIO
 
-from airsim_mapper.cli.arguments import EXIT_INVALID, EXIT_OK, EXIT_USAGE, MAPPING_HELP, add_scene_arguments
+from airsim_mapper.cli.arguments import (
+    EXIT_INVALID,
+    EXIT_OK,
+    EXIT_USAGE,
+    MAPPING_HELP,
+    add_scene_arguments,
+    parse,
+)
 from airsim_mapper.convert import catalog
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
-from airsim_mapper.resources import ros_setup_file, sim_config_dir
+from airsim_mapper.resources import ros_setup_file
 
 HEADERS = ("ROS name", "type", "direction", "simulator", "frame", "bridge")
 
@@ -125,12 +132,9 @@ def ros_setup(out: TextIO) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run airsim-mapper with `argv` (default: sys.argv[1:]); return the exit status."""
-    try:
-        args = _parser().parse_args(argv)
-        if hasattr(args, "simconfigpath"):
-            args.simconfigpath = sim_config_dir(args.simconfigpath)
-    except SystemExit as stop:  # argparse has printed the usage or help message
-        return EXIT_OK if stop.code == 0 else EXIT_USAGE
+    args = parse(_parser(), argv)
+    if isinstance(args, int):  # usage or help printed
+        return args
     if args.command == "converters":
         sys.stdout.write(catalog.converters_markdown())
         return EXIT_OK

@@ -13,14 +13,21 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from airsim_mapper.cli.arguments import EXIT_INVALID, EXIT_OK, EXIT_USAGE, MAPPING_HELP, add_scene_arguments
+from airsim_mapper.cli.arguments import (
+    EXIT_INVALID,
+    EXIT_OK,
+    EXIT_USAGE,
+    MAPPING_HELP,
+    add_scene_arguments,
+    parse,
+)
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.expand import selected
 from airsim_mapper.mapping.match import describe
 from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
-from airsim_mapper.resources import mapping_path, sim_config_dir
+from airsim_mapper.resources import mapping_path
 from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
@@ -96,12 +103,9 @@ def resolved_yaml(spec: str) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
-    try:
-        args = _parser().parse_args(argv)
-        if hasattr(args, "simconfigpath"):
-            args.simconfigpath = sim_config_dir(args.simconfigpath)
-    except SystemExit as stop:  # argparse has printed the usage message
-        return EXIT_OK if stop.code == 0 else EXIT_USAGE
+    args = parse(_parser(), argv)
+    if isinstance(args, int):  # usage or help printed
+        return args
     try:
         if args.new is not None:
             if args.scene is None:
