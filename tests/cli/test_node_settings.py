@@ -8,13 +8,13 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
+from harness import ROOT, SIM_CONFIG
 
 from airsim_mapper.cli.node import SETTINGS, SettingError, given_settings, parse_args, resolve_settings
 from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 
-LAUNCH = Path(__file__).resolve().parent.parent / "launch"
-SIM_CONFIG = Path(__file__).resolve().parent.parent / "sim_config"
+LAUNCH = ROOT / "launch"
 # launch defaults that differ from the node's on purpose: roslaunch finds the package's own sim_config
 LAUNCH_OWN_DEFAULTS = {"simconfigpath": "$(find projectairsim_ros)/sim_config"}
 
@@ -69,7 +69,7 @@ def test_a_port_out_of_range_is_refused_as_a_switch_and_as_a_parameter(value, ca
 def test_the_default_sim_config_falls_back_to_the_package_s_own(tmp_path, monkeypatch) -> None:
     monkeypatch.chdir(tmp_path)  # rosrun from $HOME: no ./sim_config
     resolved = resolve_settings(given([]), params())["simconfigpath"]
-    assert Path(resolved.value) == Path(__file__).resolve().parent.parent / "sim_config"
+    assert Path(resolved.value) == SIM_CONFIG
     assert "does not exist here, so the package's own" in resolved.source
     explicit = resolve_settings(given(["--simconfigpath", "sim_config/"]), params())["simconfigpath"]
     assert explicit.value == "sim_config/"  # given on purpose: kept, and its absence reported later
@@ -126,7 +126,7 @@ def test_the_node_knows_its_final_name_before_init_node_as_rospy_will_make_it() 
 
 
 def test_the_start_scene_is_read_and_expanded_once_when_the_final_name_is_the_early_one(monkeypatch) -> None:
-    from airsim_mapper.cli.node import prepare
+    from airsim_mapper.cli.node import prepare_node
     from airsim_mapper.mapping import pipeline
 
     calls = {"expand": 0, "read_scene": 0}
@@ -141,15 +141,15 @@ def test_the_start_scene_is_read_and_expanded_once_when_the_final_name_is_the_ea
     monkeypatch.setattr(pipeline, "expand", counted("expand", pipeline.expand))
     monkeypatch.setattr(pipeline, "read_scene", counted("read_scene", pipeline.read_scene))
     settings = {"mapping": "default", "scene": "scene_basic_drone.jsonc", "simconfigpath": str(SIM_CONFIG)}
-    early = prepare(settings, "projectairsim_1_2", "")
-    final = prepare(settings, "projectairsim_1_2", "", early)
+    early = prepare_node(settings, "projectairsim_1_2", "")
+    final = prepare_node(settings, "projectairsim_1_2", "", early)
     assert final.specs is early.specs and calls == {"expand": 1, "read_scene": 1}
-    renamed = prepare(settings, "other", "", early)  # a __name:= the early look could not know
+    renamed = prepare_node(settings, "other", "", early)  # a __name:= the early look could not know
     assert renamed.scene is early.scene and calls == {"expand": 2, "read_scene": 1}
     # the namespace rosgraph gives early ("/fleet/") and the one rospy's name gives later ("/fleet") are one
-    fleet = prepare(settings, "other", "", renamed, "/fleet/")
+    fleet = prepare_node(settings, "other", "", renamed, "/fleet/")
     assert calls["expand"] == 3
-    assert prepare(settings, "other", "", fleet, "/fleet").specs is fleet.specs and calls["expand"] == 3
+    assert prepare_node(settings, "other", "", fleet, "/fleet").specs is fleet.specs and calls["expand"] == 3
 
 
 def test_the_node_resolves_relative_rule_names_in_its_own_namespace(tmp_path) -> None:
