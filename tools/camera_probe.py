@@ -29,7 +29,7 @@ import pynng
 from airsim_mapper.simserver import protocol
 from airsim_mapper.simserver.camera_model import IMAGE_TYPES
 from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker
-from airsim_mapper.simserver.scene_spec import IMAGE_TYPE_NAMES, parse_scene
+from airsim_mapper.simserver.scene_config import IMAGE_TYPE_NAMES, parse_scene
 from airsim_mapper.simserver.session import Session
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world_file import load_world

@@ -19,9 +19,10 @@ import numpy as np
 from airsim_mapper.simserver import annotations, camera_model, image_encoding, messages, protocol, rendering
 from airsim_mapper.simserver.camera_model import RenderedImage, RenderRequest
 from airsim_mapper.simserver.motion import Body
-from airsim_mapper.simserver.scene_spec import IMAGE_TYPE_NAMES, SensorSpec, info_topic_path
+from airsim_mapper.simserver.scene_config import IMAGE_TYPE_NAMES, SensorSpec
 from airsim_mapper.simserver.sensor_streams import Schedule, mount_pose
 from airsim_mapper.simserver.services import ServiceError
+from airsim_mapper.simserver.topic_table import info_topic_path
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 

@@ -27,10 +27,10 @@ def pose(position: np.ndarray, orientation: np.ndarray) -> dict[str, Any]:
     return {"position": vector3(position), "orientation": quaternion(orientation)}
 
 
-def pose_stamped(
+def pose_stamped_dict(
     t_ns: int, position: Sequence[float] | np.ndarray, orientation: Sequence[float] | np.ndarray
 ) -> dict[str, Any]:
-    """PoseStamped (§5.1): actual_pose / desired_pose."""
+    """The wire dict of a PoseStamped (§5.1): actual_pose / desired_pose."""
     return {"time_stamp": int(t_ns), "position": vector3(position), "orientation": quaternion(orientation)}
 
 

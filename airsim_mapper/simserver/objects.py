@@ -28,7 +28,7 @@ import numpy as np
 
 from airsim_mapper.geometry import IDENTITY_Q, quat_conjugate, quat_from_rpy, quat_multiply, rotate, yaw_of
 from airsim_mapper.simserver import gltf, messages, voxels
-from airsim_mapper.simserver.scene_spec import DEFAULT_HOME, geo_to_ned
+from airsim_mapper.simserver.geo import DEFAULT_HOME, geo_to_ned
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.world import World, WorldObject
 

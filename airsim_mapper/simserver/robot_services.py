@@ -14,6 +14,7 @@ import numpy as np
 
 from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.camera_services import CameraServices
+from airsim_mapper.simserver.geo import ned_to_geo
 from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import DRAG_TIME_S
 from airsim_mapper.simserver.motion_services import MotionServices
@@ -25,7 +26,6 @@ from airsim_mapper.simserver.robot_params import (
     within_world,
 )
 from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.scene_spec import ned_to_geo
 from airsim_mapper.simserver.sensor_streams import InstrumentStream
 from airsim_mapper.simserver.services import Method, ServiceError
 

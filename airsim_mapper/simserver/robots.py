@@ -19,7 +19,7 @@ from airsim_mapper.simserver.messages import MessageError
 from airsim_mapper.simserver.motion import Body
 from airsim_mapper.simserver.protocol import pack_plain
 from airsim_mapper.simserver.robot_params import within_world
-from airsim_mapper.simserver.scene_spec import RobotSpec, SceneSpec
+from airsim_mapper.simserver.scene_config import RobotSpec, SceneSpec
 from airsim_mapper.simserver.sensor_streams import (
     InstrumentStream,
     LidarStream,
@@ -125,7 +125,9 @@ class RobotRuntime:
 
     def publish_pose(self, now_ns: int) -> None:
         position, orientation = self.body.pose()
-        self.hub.publish(self.pose_path, pack_plain(messages.pose_stamped(now_ns, position, orientation)))
+        self.hub.publish(
+            self.pose_path, pack_plain(messages.pose_stamped_dict(now_ns, position, orientation))
+        )
 
     def step_instruments(self, now_ns: int) -> None:
         """Step every instrument on one snapshot of the body, taken when the first one is due."""

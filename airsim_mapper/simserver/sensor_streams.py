@@ -30,7 +30,7 @@ from airsim_mapper.simserver import (
 )
 from airsim_mapper.simserver.battery import BatteryState
 from airsim_mapper.simserver.motion import Body, Kinematic
-from airsim_mapper.simserver.scene_spec import SensorSpec
+from airsim_mapper.simserver.scene_config import SensorSpec
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world import World
 

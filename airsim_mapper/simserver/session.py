@@ -11,12 +11,14 @@ import numpy as np
 from airsim_mapper.simserver import messages
 from airsim_mapper.simserver.camera_stream import Render
 from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
+from airsim_mapper.simserver.geo import EARTH_RADIUS_M
 from airsim_mapper.simserver.objects import LiveWorld, Pose, SceneObjects
 from airsim_mapper.simserver.robot_services import robot_methods
 from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.scene_spec import EARTH_RADIUS_M, SceneSpec, topic_table
+from airsim_mapper.simserver.scene_config import SceneSpec
 from airsim_mapper.simserver.services import Method, ServiceError
 from airsim_mapper.simserver.sim_clock import SimClock
+from airsim_mapper.simserver.topic_table import topic_table
 from airsim_mapper.simserver.topics import TopicHub, TopicInfo
 from airsim_mapper.simserver.visual_noops import VisualSettings
 from airsim_mapper.simserver.world import World

@@ -8,8 +8,9 @@ Surfaces are one-sided: a ray that starts inside an object does not see that obj
 culled), and the ground is seen only from above (z < 0).
 
 The ray cast, the single-ray queries (`surface_below`, `range_along`) and the sphere collisions share
-the World's per-object tables (the boxes' centres, half sizes and yaws, the spheres' centres and radii), so
-they are kept together in this one module. A World is built from a world file by `world_file.py`.
+the World's per-object tables (the boxes' centres, half sizes and yaws, the spheres' centres and radii); the
+ray cast and the queries are here, the overlap of a sphere with those tables is `contacts.py`'s. A World is
+built from a world file by `world_file.py`.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+from airsim_mapper.simserver.contacts import Contact, box_contacts, sphere_contacts
 
 GROUND_INDEX = -1
 MISS_INDEX = -2
@@ -66,23 +69,6 @@ class Hits:
     @property
     def hit(self) -> np.ndarray:
         return self.object_index != MISS_INDEX
-
-
-@dataclass(frozen=True, eq=False)
-class Contact:
-    """The deepest overlap of a sphere (a robot's collision body) with a world object."""
-
-    object_name: str
-    segmentation_id: int
-    position: np.ndarray  # centre of the colliding sphere (world NED)
-    impact_point: np.ndarray  # closest point on the object's surface (world NED)
-    normal: np.ndarray  # unit vector from the object towards the sphere centre
-    penetration_depth: float
-
-
-def _yaw_rotate(cos: np.ndarray, sin: np.ndarray, x, y):
-    """Rotate (x, y) by +yaw (object local -> world)."""
-    return cos * x - sin * y, sin * x + cos * y
 
 
 class World:
@@ -433,9 +419,13 @@ class World:
         best: tuple[float, int, np.ndarray, np.ndarray] | None = None
         candidates = []
         if self._box_index.size:
-            candidates.append(self._box_contacts(c, radius))
+            depth, points, normals = box_contacts(
+                c, radius, self._box_center, self._box_half, self._box_cos, self._box_sin
+            )
+            candidates.append((depth, self._box_index, points, normals))
         if self._sphere_index.size:
-            candidates.append(self._sphere_contacts(c, radius))
+            depth, points, normals = sphere_contacts(c, radius, self._sphere_center, self._sphere_radius)
+            candidates.append((depth, self._sphere_index, points, normals))
         for depth, objs, points, normals in candidates:
             collidable = np.array([self.objects[i].collidable for i in objs], dtype=bool)
             depth = np.where(collidable, depth, -np.inf)
@@ -447,48 +437,3 @@ class World:
         depth, i, point, normal = best
         obj = self.objects[i]
         return Contact(obj.name, obj.segmentation_id, c.copy(), point, normal, depth)
-
-    def _box_contacts(self, c: np.ndarray, radius: float):
-        cos = self._box_cos.astype(np.float64)
-        sin = self._box_sin.astype(np.float64)
-        half = self._box_half.astype(np.float64)
-        rel = c - self._box_center.astype(np.float64)
-        local = np.stack(
-            [cos * rel[:, 0] + sin * rel[:, 1], -sin * rel[:, 0] + cos * rel[:, 1], rel[:, 2]], 1
-        )
-        closest = np.clip(local, -half, half)
-        gap = local - closest
-        dist = np.linalg.norm(gap, axis=1)
-        outside = dist > 1e-9
-        # inside: push out through the nearest face
-        face_dist = half - np.abs(local)
-        axis = np.argmin(face_dist, axis=1)
-        rows = np.arange(axis.size)
-        sign = np.where(local[rows, axis] >= 0.0, 1.0, -1.0)
-        inside_n = np.zeros_like(local)
-        inside_n[rows, axis] = sign
-        inside_p = local.copy()
-        inside_p[rows, axis] = sign * half[rows, axis]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            out_n = gap / np.where(outside, dist, 1.0)[:, None]
-        local_n = np.where(outside[:, None], out_n, inside_n)
-        local_p = np.where(outside[:, None], closest, inside_p)
-        depth = np.where(outside, radius - dist, radius + face_dist[rows, axis])
-        nx, ny = _yaw_rotate(cos, sin, local_n[:, 0], local_n[:, 1])
-        px, py = _yaw_rotate(cos, sin, local_p[:, 0], local_p[:, 1])
-        normals = np.stack([nx, ny, local_n[:, 2]], 1)
-        points = np.stack([px, py, local_p[:, 2]], 1) + self._box_center
-        return depth, self._box_index, points, normals
-
-    def _sphere_contacts(self, c: np.ndarray, radius: float):
-        centers = self._sphere_center.astype(np.float64)
-        radii = self._sphere_radius.astype(np.float64)
-        rel = c - centers
-        dist = np.linalg.norm(rel, axis=1)
-        normals = np.where(
-            (dist > 1e-9)[:, None],
-            rel / np.where(dist > 1e-9, dist, 1.0)[:, None],
-            np.array([0.0, 0.0, -1.0]),
-        )
-        points = centers + normals * radii[:, None]
-        return radius + radii - dist, self._sphere_index, points, normals

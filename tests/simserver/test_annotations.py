@@ -11,7 +11,7 @@ import pytest
 from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings, annotate
 from airsim_mapper.simserver.camera_model import camera_info_message
-from airsim_mapper.simserver.scene_spec import SceneSpecError, parse_scene
+from airsim_mapper.simserver.scene_config import SceneSpecError, parse_scene
 from airsim_mapper.simserver.world_file import world_from_dict
 
 ORIGIN, LEVEL = np.zeros(3), quat_from_rpy(0.0, 0.0, 0.0)

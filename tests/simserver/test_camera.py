@@ -217,11 +217,11 @@ class PublishedImages:
 def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(world):
     from airsim_mapper.simserver.camera_stream import CameraStream
     from airsim_mapper.simserver.motion import Body
-    from airsim_mapper.simserver.scene_spec import CaptureSetting, SensorSpec
+    from airsim_mapper.simserver.scene_config import CaptureSpec, SensorSpec
 
     captures = (
-        CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),
-        CaptureSetting(2, 64, 48, 90.0, True, False, compress=False),
+        CaptureSpec(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),
+        CaptureSpec(2, 64, 48, 90.0, True, False, compress=False),
     )
     sensor = SensorSpec("C", "camera", {}, captures=captures, capture_interval=0.1)
     body = Body(np.array([0.0, 0.0, -20.0]), quat_from_rpy(0.0, -math.pi / 2, 0.0), lambda p: 0.0)

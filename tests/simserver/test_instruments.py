@@ -229,7 +229,7 @@ def test_a_robots_instruments_publish_every_tick_from_one_snapshot_of_the_body(m
 
     from airsim_mapper.simserver.motion import Body
     from airsim_mapper.simserver.robots import RobotRuntime
-    from airsim_mapper.simserver.scene_spec import SensorSpec
+    from airsim_mapper.simserver.scene_config import SensorSpec
     from airsim_mapper.simserver.sensor_streams import InstrumentStream
 
     body = Body(np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, 0.0, 0.0), lambda _p: 0.0)

@@ -219,7 +219,7 @@ class EverythingSubscribed:
 
 def lidar_stream(world, config: dict, step_ns: int = 3_000_000):
     from airsim_mapper.simserver.motion import Body
-    from airsim_mapper.simserver.scene_spec import SensorSpec
+    from airsim_mapper.simserver.scene_config import SensorSpec
     from airsim_mapper.simserver.sensor_streams import LidarStream
 
     body = Body(np.array([0.0, 0.0, -10.0]), LEVEL, lambda _p: 0.0)

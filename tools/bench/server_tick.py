@@ -24,7 +24,7 @@ from typing import Any
 import pynng
 
 from airsim_mapper.simserver.protocol import FrameType, encode_frame
-from airsim_mapper.simserver.scene_spec import parse_scene
+from airsim_mapper.simserver.scene_config import parse_scene
 from airsim_mapper.simserver.session import Session
 from airsim_mapper.simserver.topics import TopicHub
 from airsim_mapper.simserver.world_file import load_world

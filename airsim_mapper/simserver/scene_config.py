@@ -1,10 +1,7 @@
 """Scene configuration as the server receives it from `/Sim/LoadScene` (one merged JSON document).
 
-`parse_scene` validates what the server needs and returns immutable specs; `topic_table` lists the topics
-the real server registers for that scene (protocol.md §4): per robot `actual_pose`, `desired_pose`,
-`collision_info`, `rotor_info`; per enabled sensor its leaves; per capture-enabled camera setting the image
-topic and its `_info` topic, except type 5 whose info topic has the image topic's own name (a real-server
-quirk: one row, message type `image`; its CameraInfo is not published, so the topic carries only images).
+`parse_scene` validates what the server needs and returns immutable specs (`SceneSpec`, its robots, their
+sensors and capture settings, the clock, the environment actors and the wind).
 """
 
 from __future__ import annotations
@@ -24,11 +21,10 @@ from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSetti
 from airsim_mapper.simserver.camera_model import DEFAULT_MAX_DEPTH_VIS
 from airsim_mapper.simserver.env_actors import ENV_ACTOR_TYPES, EnvActorSpec, actor_script
 from airsim_mapper.simserver.errors import SimServerError
+from airsim_mapper.simserver.geo import DEFAULT_HOME, geo_to_ned
 from airsim_mapper.simserver.motion import DEFAULT_MASS_KG, MAX_WIND_MPS
-from airsim_mapper.simserver.topics import PUBLISHED, SUBSCRIBED, TopicInfo
 
 IMAGE_TYPE_NAMES = SIM_IMAGE_LEAVES
-DISPARITY_NORMALIZED = 5
 
 SENSOR_LEAVES = {
     "imu": ("imu_kinematics", "imu", 100),
@@ -42,8 +38,6 @@ SENSOR_LEAVES = {
 }
 SENSOR_TYPES = frozenset({"camera", "radar", *SENSOR_LEAVES})
 CLOCK_TYPES = frozenset({"steppable", "real-time"})
-DEFAULT_HOME = (47.641468, -122.140165, 122.0)
-EARTH_RADIUS_M = 6378137.0
 
 
 class SceneSpecError(SimServerError, ValueError):
@@ -51,7 +45,7 @@ class SceneSpecError(SimServerError, ValueError):
 
 
 @dataclass(frozen=True)
-class CaptureSetting:
+class CaptureSpec:
     image_type: int
     width: int
     height: int
@@ -70,11 +64,11 @@ class SensorSpec:
     config: Mapping[str, Any]
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))
     orientation: np.ndarray = field(default_factory=lambda: IDENTITY_Q.copy())
-    captures: tuple[CaptureSetting, ...] = ()
+    captures: tuple[CaptureSpec, ...] = ()
     capture_interval: float = 5.0
     annotation: AnnotationSettings | None = None  # a camera's annotation-settings, when on
 
-    def enabled_captures(self) -> tuple[CaptureSetting, ...]:
+    def enabled_captures(self) -> tuple[CaptureSpec, ...]:
         return tuple(c for c in self.captures if c.capture_enabled)
 
 
@@ -177,21 +171,6 @@ def _number(value: Any, where: str) -> float:
     return float(value)
 
 
-def geo_to_ned(geo: tuple[float, float, float], home: tuple[float, float, float]) -> np.ndarray:
-    """Flat-earth NED offset of a geo point (lat, lon, alt) from the home point."""
-    lat0 = math.radians(home[0])
-    north = math.radians(geo[0] - home[0]) * EARTH_RADIUS_M
-    east = math.radians(geo[1] - home[1]) * EARTH_RADIUS_M * math.cos(lat0)
-    return np.array([north, east, home[2] - geo[2]])
-
-
-def ned_to_geo(ned: np.ndarray, home: tuple[float, float, float]) -> tuple[float, float, float]:
-    lat0 = math.radians(home[0])
-    lat = home[0] + math.degrees(float(ned[0]) / EARTH_RADIUS_M)
-    lon = home[1] + math.degrees(float(ned[1]) / (EARTH_RADIUS_M * max(math.cos(lat0), 1e-9)))
-    return lat, lon, home[2] - float(ned[2])
-
-
 def _origin(origin: Any, where: str, home: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     if origin is None:
         return np.zeros(3), IDENTITY_Q.copy()
@@ -212,7 +191,7 @@ def _origin(origin: Any, where: str, home: tuple[float, float, float]) -> tuple[
         raise SceneSpecError(f"{where}: {exc}") from exc
 
 
-def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ...]:
+def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSpec, ...]:
     settings = sensor.get("capture-settings", [])
     if not isinstance(settings, list):
         raise SceneSpecError(f"{where} 'capture-settings' must be a list")
@@ -239,7 +218,7 @@ def _captures(sensor: Mapping[str, Any], where: str) -> tuple[CaptureSetting, ..
         if max_depth <= 0.0:
             raise SceneSpecError(f"{here} 'max-depth-meters' must be positive, got {max_depth}")
         captures.append(
-            CaptureSetting(
+            CaptureSpec(
                 image_type,
                 width,
                 height,
@@ -403,52 +382,3 @@ def _env_actor(actor: Any, index: int, home: tuple[float, float, float]) -> EnvA
     names = tuple(str(link["name"]) for link in links if isinstance(link, Mapping) and "name" in link)
     script = actor_script(config, f"environment actor '{name}'", SceneSpecError)
     return EnvActorSpec(str(name), position, orientation, names, script)
-
-
-# ---------------------------------------------------------------------------------------------- topics
-
-
-def camera_topics(prefix: str, sensor: SensorSpec) -> list[TopicInfo]:
-    rows = []
-    for capture in sensor.enabled_captures():
-        name = IMAGE_TYPE_NAMES[capture.image_type]
-        rows.append(TopicInfo(f"{prefix}/{name}", PUBLISHED, "image", 60))
-        if capture.image_type != DISPARITY_NORMALIZED:
-            rows.append(TopicInfo(f"{prefix}/{name}_info", PUBLISHED, "camera-info", 60))
-    return rows
-
-
-def info_topic_path(prefix: str, image_type: int) -> str:
-    """The path of a camera's info topic (type 5: the image topic's own, the real quirk)."""
-    name = IMAGE_TYPE_NAMES[image_type]
-    return f"{prefix}/{name}" if image_type == DISPARITY_NORMALIZED else f"{prefix}/{name}_info"
-
-
-def sensor_topics(prefix: str, sensor: SensorSpec) -> list[TopicInfo]:
-    if sensor.type == "camera":
-        return camera_topics(prefix, sensor)
-    if sensor.type == "radar":
-        return [
-            TopicInfo(f"{prefix}/radar_detections", PUBLISHED, "", 60),
-            TopicInfo(f"{prefix}/radar_tracks", PUBLISHED, "", 60),
-        ]
-    leaf, message_type, frequency = SENSOR_LEAVES[sensor.type]
-    return [TopicInfo(f"{prefix}/{leaf}", PUBLISHED, message_type, frequency)]
-
-
-def topic_table(scene: SceneSpec) -> list[TopicInfo]:
-    """Every topic the scene registers, `/$topics` included, in path order."""
-    rows = [TopicInfo("/$topics", PUBLISHED, "topic-list", 0)]
-    for robot in scene.robots:
-        base = scene.robot_prefix(robot.name)
-        rows += [
-            TopicInfo(f"{base}/actual_pose", PUBLISHED, "", 0),
-            TopicInfo(f"{base}/desired_pose", SUBSCRIBED, "", 0),
-            TopicInfo(f"{base}/collision_info", PUBLISHED, "collision-info", 0),
-            TopicInfo(f"{base}/rotor_info", PUBLISHED, "", 0),
-        ]
-        for sensor in robot.sensors:
-            rows += sensor_topics(scene.sensor_prefix(robot.name, sensor.id), sensor)
-    for actor in scene.env_actors:
-        rows.append(TopicInfo(f"{scene.prefix}/env_actors/{actor.name}/actual_kinematics", PUBLISHED, "", 0))
-    return sorted(rows, key=lambda row: row.path)
