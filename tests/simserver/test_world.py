@@ -8,9 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from airsim_mapper.simserver import world as world_module
-from airsim_mapper.simserver.world import GROUND_INDEX, MISS_INDEX, World, WorldObject
-from airsim_mapper.simserver.world_file import DEFAULT_WORLD_PATH, WorldError, load_world, world_from_dict
+from airsim_mapper.simserver.world import world as world_module
+from airsim_mapper.simserver.world.world import GROUND_INDEX, MISS_INDEX, World, WorldObject
+from airsim_mapper.simserver.world.world_file import (
+    DEFAULT_WORLD_PATH,
+    WorldError,
+    load_world,
+    world_from_dict,
+)
 
 
 @pytest.fixture(scope="module")
