@@ -29,8 +29,8 @@ from airsim_mapper.rviz_radar import (
     return_points,
     scan_markers,
 )
-from airsim_mapper.simserver.radar_model import RadarModel
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.sensors.radar_model import RadarModel
+from airsim_mapper.simserver.world.world_file import load_world
 from tools.screenshot import screenshot
 
 LAUNCH = ROOT / "launch" / "rviz.launch"

@@ -21,10 +21,10 @@ from collections.abc import Callable
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
-from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world
 from tools.bench.renderers import POSES
 
 WIDTH, HEIGHT, FOV = 1280, 720, 90.0

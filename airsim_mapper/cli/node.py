@@ -162,7 +162,7 @@ def listening(uri: str, timeout: float) -> bool:
     return accepts_connections(host, number, timeout)
 
 
-def prepare(
+def prepare_node(
     settings: dict[str, Any],
     node_name: str,
     namespace: str,
@@ -170,10 +170,10 @@ def prepare(
     node_namespace: str = "",
 ) -> Prepared:
     """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings)."""
-    from airsim_mapper.mapping.pipeline import prepare as prepare_pipeline
+    from airsim_mapper.mapping.pipeline import prepare
 
     sources = (settings["mapping"], settings["scene"], settings["simconfigpath"])
-    return prepare_pipeline(*sources, node_name, namespace, known, node_namespace)
+    return prepare(*sources, node_name, namespace, known, node_namespace)
 
 
 def config_problem(
@@ -185,7 +185,7 @@ def config_problem(
 ) -> tuple[Prepared | None, str | None]:
     """(prepared, None), or (None, what to print) when the mapping or scene is invalid."""
     try:
-        return prepare(settings, node_name, namespace, known, node_namespace), None
+        return prepare_node(settings, node_name, namespace, known, node_namespace), None
     except ConfigError as exc:
         return None, str(exc)
     except OSError as exc:

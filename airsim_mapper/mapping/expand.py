@@ -29,8 +29,7 @@ from airsim_mapper.image_types import FLOAT_IMAGE_TYPES, SIM_IMAGE_LEAVES
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.match import matches
-from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
-from airsim_mapper.mapping.model import Mapping as MappingDoc
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc, Rule, TfSpec
 from airsim_mapper.mapping.names import resolve_name, ros_name_problem
 from airsim_mapper.mapping.origins import place_text
 from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem

@@ -144,7 +144,7 @@ def test_each_image_type_has_its_size_encoding_and_frame(rig: Stack, kind: str):
     assert image.encoding == ("32FC1" if depth else "bgr8")
     assert image.step == image.width * 4 if depth else image.width * 3
     assert len(image.data) == image.step * image.height
-    assert image.header.frame_id == f"airsim_node/Drone1/DownCamera/{kind}_optical"  # REP 103 (#19)
+    assert image.header.frame_id == f"airsim_node/Drone1/DownCamera/{kind}_optical"  # REP 103
     assert info.header.frame_id == image.header.frame_id
     assert (info.width, info.height) == (320, 240)
     f = 160.0  # (320 / 2) / tan(90 deg / 2)

@@ -298,7 +298,7 @@ def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sens
     )
     normals = by_ros["/airsim_node/Drone1/DownCamera/surface_normals/image"]
     assert normals.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/surface_normals_camera"
-    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals_optical"  # REP 103 (#19)
+    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals_optical"  # REP 103
     info = by_ros["/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info"]
     assert info.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/disparity_normalized_camera"
     lidar = by_ros["/airsim_node/Drone1/lidar1/lidar"]

@@ -34,7 +34,7 @@ from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.fast_frames import parse_frame_header
 from airsim_mapper.engine.publish import serialized
 from airsim_mapper.engine.receive import decode_body
-from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.wire import protocol
 from tools.bench import reference
 
 FULL_HD = (1920, 1080)

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.world.world_file import load_world
 
 CASES = {  # name: (width, height, image types)
     "scene 1280x720": (1280, 720, (camera_model.SCENE,)),

@@ -1,4 +1,4 @@
-"""Tables of the benchmark results, and the issue's targets checked against them (pure functions)."""
+"""Tables of the benchmark results, and the targets checked against them (pure functions)."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ POSE_HZ = 100.0
 SCALE_CAMERA_HZ = 10.0
 SCALE_POSE_P99_MS = 4.0  # the ten drones' worst pose p99 target
 SCALE_CORES = 0.25  # the ten drones' CPU target
-# A host past either is noisy enough to decide the latency figures (docs/performance.md): the quiet hosts
-# the targets were met on lost about 2% to steal, and an idle 1 ms sleep overshot by 0.2-0.8 ms at p99.
+# A host past either is noisy enough to decide the latency figures (docs/performance.md): each is several
+# times what a quiet host of the kind shows, so the host's delays, not the bridge's, would set the tail.
 NOISY_STOLEN_SHARE = 0.05
 NOISY_WAKE_P99_MS = 1.0
 # A round of a latency case is quiet when both windows its targets compare (the bridge's, the bare
@@ -325,7 +325,7 @@ def _x(value: float | None) -> str:
 
 
 def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
-    """The targets against the bare forwarder (issue #30), for the cases measured through both."""
+    """The targets against the bare forwarder, for the cases measured through both."""
     pairs = {key: (ours, floor) for key, _label, ours, floor in _pairs(e2e)}
     out: list[dict[str, Any]] = []
     if "pose_idle" in pairs:
@@ -404,7 +404,7 @@ def _pose_cpu_ratio(ours: dict[str, Any], floor: dict[str, Any], per_probe: bool
     With `per_probe`, where both windows have their probe's CPU, each node's CPU is taken over its probe's:
     the probe reads the same messages at the same rate from either node, so its CPU follows only how fast
     the host ran during that window, which moves small CPU figures between windows far more than anything
-    the nodes do differently (docs/performance.md, "The host's speed in each window")."""
+    the nodes do differently (docs/performance.md, "Reading the figures")."""
     probes = ours.get("probe_cpu_cores"), floor.get("probe_cpu_cores")
     if per_probe and all(probes):
         return _ratio(ours["bridge_cpu_cores"] / probes[0], floor["forwarder_cpu_cores"] / probes[1])
@@ -609,7 +609,7 @@ def _target(
 
 
 def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
-    """The issue's targets with the measured value, the limit and whether it is met."""
+    """The targets with the measured value, the limit and whether it is met."""
     c = results["costs"]
     out = [
         _target(

@@ -25,10 +25,10 @@ from collections.abc import Callable
 import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.lidar_model import LidarModel
-from airsim_mapper.simserver.rendering import render
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.render.rendering import render
+from airsim_mapper.simserver.sensors.lidar_model import LidarModel
+from airsim_mapper.simserver.world.world_file import load_world
 
 WIDTH, HEIGHT, FOV = 640, 480, 90.0
 TYPE_NAMES = (
