@@ -26,6 +26,7 @@ from airsim_mapper.geometry import quat_from_rpy
 from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
 from airsim_mapper.simserver.camera_model import RenderRequest
 from airsim_mapper.simserver.world_file import load_world
+from tools.bench import tables
 
 CASES = {  # name: (width, height, image types)
     "scene 1280x720": (1280, 720, (camera_model.SCENE,)),
@@ -83,8 +84,6 @@ def run(gl_renders: int = GL_RENDERS, raycast_renders: int = RAYCAST_RENDERS) ->
 
 
 def table(results: dict[str, Any]) -> str:
-    from tools.bench.report import _table
-
     rows = []
     for name in CASES:
         gl, ray = results["gl"].get(name), results["raycast"][name]
@@ -108,7 +107,7 @@ def table(results: dict[str, Any]) -> str:
         "GL/raycast",
     ]
     note = f"GL: {results.get('gl_renderer') or results.get('gl_error')}; {os.cpu_count()} cores"
-    return _table([*header, "target /s"], rows) + "\n" + note
+    return tables.table([*header, "target /s"], rows) + "\n" + note
 
 
 def targets(results: dict[str, Any]) -> list[tuple[str, float | None, float]]:
