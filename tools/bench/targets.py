@@ -101,15 +101,12 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
     if "camera" in both:
         every = latency_rounds(e2e, "camera")
         rounds = judged_rounds(every)
-        ratios = [p99_ratio(r["bridge"], r["forwarder"]) for r in rounds]
-        note = _rounds_note(ratios, times, left_out=len(every) - len(rounds))
-        note += _p99_note(*both["camera"], every[0].get("receive_floor"))
+        note = _p99_note(*both["camera"], every[0].get("receive_floor"))
         if "camera_apart" in both:  # a figure beside the target, which stays judged on the one probe
             apart = both["camera_apart"]
             note += f"; images read apart: {times(p99_ratio(*apart))}, {_p99_note(*apart)}"
-        out.append(
-            _limit("pose p99 under a 1080p camera @30 / the forwarder's", median_of(ratios), 0.8, "x", note)
-        )
+        name = "pose p99 under a 1080p camera @30 / the forwarder's"
+        out.append(_p99_ratio_target(name, rounds, len(every) - len(rounds), 0.8, note))
     if "camera_load" in both:
         every = latency_rounds(e2e, "camera_load")
         rounds = judged_rounds(every)
@@ -118,11 +115,8 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
         rate = median(rates)
         note = _rounds_note(rates, lambda r: f"{r:.1f} Hz", None, left_out)
         out.append(_least("pose rate under a 1080p camera @60", rate, 98.0, "Hz", note))
-        ratios = [p99_ratio(r["bridge"], r["forwarder"]) for r in rounds]
-        note = _rounds_note(ratios, times, left_out=left_out) + _p99_note(*both["camera_load"])
-        out.append(
-            _limit("pose p99 under a 1080p camera @60 / the forwarder's", median_of(ratios), 1.0, "x", note)
-        )
+        name = "pose p99 under a 1080p camera @60 / the forwarder's"
+        out.append(_p99_ratio_target(name, rounds, left_out, 1.0, _p99_note(*both["camera_load"])))
     if "scale" in both:
         every = latency_rounds(e2e, "scale")
         rounds = judged_rounds(every)
@@ -138,6 +132,15 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
         note += _p99_note(*both["scale"], every[0].get("receive_floor"))
         out.append(_limit(f"{drones} drones: worst pose p99", median_of(p99s), SCALE_POSE_P99_MS, "ms", note))
     return out
+
+
+def _p99_ratio_target(
+    name: str, rounds: list[dict[str, Any]], left_out: int, limit: float, note: str
+) -> dict[str, Any]:
+    """The bridge's worst pose p99 over the forwarder's: the median over the judged rounds, each round's
+    figure in the note before `note`."""
+    ratios = [p99_ratio(r["bridge"], r["forwarder"]) for r in rounds]
+    return _limit(name, median_of(ratios), limit, "x", _rounds_note(ratios, times, left_out=left_out) + note)
 
 
 def _pose_cpu_ratio(ours: dict[str, Any], floor: dict[str, Any], per_probe: bool = True) -> float | None:
