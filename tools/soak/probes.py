@@ -20,8 +20,8 @@ WAKE_LATE_S = 0.005  # a wake-up later than this is written down
 def pose_probe(out: Path) -> int:
     """A process that only receives actual_pose (TCP_NODELAY) and writes `receive time, stamp` lines.
 
-    The gap verdict comes from here: the monitor above receives every image and cloud of the bridge, about
-    100 MB/s, and a pause of its own would count against the bridge.
+    The gap verdict comes from here: the monitor (listener.py) receives every image and cloud of the
+    bridge, about 100 MB/s, and a pause of its own would count against the bridge.
     """
     import rospy
     from geometry_msgs.msg import PoseStamped
