@@ -15,7 +15,7 @@ from typing import Any
 
 from tools.bench import scenes
 from tools.bench.e2e import Bench
-from tools.bench.report import per_message_cpu_ms, topic
+from tools.bench.results import per_message_cpu_ms, topic
 
 CAMERA_HZ = 30.0
 JPEG_MIN_HZ = 29.0  # the targets: 1080p @30 JPEG delivered, 1080p depth on 2 cores
