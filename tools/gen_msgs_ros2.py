@@ -136,7 +136,7 @@ def verify(venv: Path) -> None:
 
 
 def setup_venv(venv: Path, force: bool = False) -> str:
-    """`make setup`'s step: build the packages when their sources changed, verify them. Returns what was done."""
+    """`make setup`'s step: build the packages when their sources changed, verify them; says what it did."""
     stamp = venv / STAMP_NAME
     want = digest(venv)
     if not force and stamp.is_file() and stamp.read_text() == want:
