@@ -1,4 +1,4 @@
-"""The ROS 2 flavour's test kit: .venv-ros2's interpreter, and a ROS_DOMAIN_ID of a test's own.
+"""The ROS 2 flavour's fixtures: .venv-ros2's interpreter, and a ROS_DOMAIN_ID of a test's own.
 
 A domain is claimed with an exclusive lock on a file named for it, held for the whole test, so tests of
 parallel pytest runs (and workers) on one machine never share a domain; the search starts at a place
@@ -9,15 +9,12 @@ from __future__ import annotations
 
 import fcntl
 import os
-import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from ros2kit import ROS2_PYTHON
 
-ROOT = Path(__file__).resolve().parent.parent.parent
-ROS2_PYTHON = ROOT / ".venv-ros2" / "bin" / "python"
-PEER = Path(__file__).resolve().parent / "peer_ros2.py"
 DOMAIN_LOCKS = Path("/tmp/airsim-mapper-ros2-domains")
 DOMAINS = range(1, 102)  # Fast DDS's ports fit domains 0-232; 0 is everyone's default
 
@@ -49,23 +46,3 @@ def ros_domain() -> Iterator[int]:
             handle.close()
         return
     pytest.fail(f"every ROS 2 domain in {DOMAINS} is taken")
-
-
-def ros2_env(domain: int) -> dict[str, str]:
-    """The environment of a process in .venv-ros2: no ROS1 paths, its own domain, localhost discovery."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("ROS_", "AMENT_", "RMW_"))}
-    env.pop("PYTHONPATH", None)
-    env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
-    env["RMW_IMPLEMENTATION"] = "rmw_fastrtps_cpp"
-    return env
-
-
-def start_peer(python: Path, domain: int, *args: str) -> subprocess.Popen:
-    """peer_ros2.py in .venv-ros2, its output captured."""
-    return subprocess.Popen(
-        [str(python), str(PEER), *args],
-        env=ros2_env(domain),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )

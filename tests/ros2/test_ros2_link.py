@@ -10,7 +10,7 @@ from pathlib import Path
 
 import commentjson
 import pytest
-from conftest import ROOT, ros2_env, start_peer
+from ros2kit import PEER, ROOT, ros2_env, start_peer
 
 from tools.gen_msgs_ros2 import EXPECTED_RIHS01, MSG_ROOT, generated_hashes
 
@@ -73,7 +73,7 @@ def test_a_message_crosses_between_two_rclpy_processes_field_for_field(
 
 def test_the_generated_types_have_the_fields_of_the_repos_definitions(ros2_python, ros_domain):
     run = subprocess.run(
-        [str(ros2_python), str(Path(__file__).parent / "peer_ros2.py"), "fields"],
+        [str(ros2_python), str(PEER), "fields"],
         env=ros2_env(ros_domain),
         capture_output=True,
         text=True,
