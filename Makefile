@@ -36,4 +36,4 @@ screenshot: setup
 	@$(PY) -m tools.screenshot --out $(SCREENSHOT)
 
 clean:
-	rm -rf .venv devel build out tools/bench/results.json .pytest_cache .ruff_cache
+	rm -rf .venv .venv-ros2 devel build out tools/bench/results.json .pytest_cache .ruff_cache

@@ -4,7 +4,7 @@ A leaf module (it imports nothing of the package), so every layer can use it. Un
 subpackage has one base of its own (`mapping.errors.MappingError`, `convert.errors.ConvertError`,
 `engine.errors.EngineError`, `simserver.errors.SimServerError`, `cli.errors.CliError`); the shared modules
 at the top (files, geometry, scene, wrapper, rviz_radar) raise classes based on the root or on
-`ConfigError`. Classes that were a ValueError, LookupError, ... before keep that base as well.
+`ConfigError`. A class that callers may catch as a ValueError, LookupError, ... has that base as well.
 
 `ConfigError` is here because both the mapping layer and `scene.py` (below it) raise it: a mapping or a
 scene is invalid, and `str()` is the full report, one `FILE:LINE:COL: message` a line.

@@ -20,3 +20,7 @@ SIM_IMAGE_LEAVES: dict[int, str] = {
 # image-type id -> <image_type> in ROS names, as the table of the Project AirSim ROS bridge documentation
 # gives it (a mapping may override it)
 DOCUMENTED_IMAGE_TYPES: dict[int, str] = {**SIM_IMAGE_LEAVES, 6: "surface_normals"}
+
+# image-type ids whose pixels are float depth in metres (the simulator sends float16, the bridge 32FC1); every
+# other type is 8-bit colour
+FLOAT_IMAGE_TYPES = frozenset({1, 2})

@@ -40,7 +40,7 @@ from airsim_mapper.errors import AirsimMapperError
 from airsim_mapper.logs import caller_logger, ros_logger, wait_for_rosout
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.resources import DEFAULT_MAPPING
@@ -95,7 +95,7 @@ class ProjectAirSimWrapper:
         topicsport: int = TOPICS_PORT,
         servicesport: int = SERVICES_PORT,
         sim_config_path: str | Path = "sim_config/",
-        mapping: Mapping | str | Path = DEFAULT_MAPPING,
+        mapping: MappingDoc | str | Path = DEFAULT_MAPPING,
         scene: str | None = None,
         node_name: str | None = None,
         namespace: str = "",
@@ -109,7 +109,7 @@ class ProjectAirSimWrapper:
         redirect_client_log()
         wait_for_rosout()  # so that what the wrapper and its client log first reaches rosout.log (logs.py)
         self.shutdown_timeout = shutdown_timeout
-        self.mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
+        self.mapping = mapping if isinstance(mapping, MappingDoc) else load_mapping(mapping)
         self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown
         if client is None:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
@@ -159,11 +159,11 @@ class ProjectAirSimWrapper:
         read, with its bridges already expanded for this node: see Engine.load_scene)."""
         return self.engine.load_scene(scene_file, specs)
 
-    def apply_mapping(self, mapping: Mapping | str | Path) -> BridgeDiff:
-        """Run another mapping (a Mapping, a file, or a shipped mapping's name) from now on, restarting only
+    def apply_mapping(self, mapping: MappingDoc | str | Path) -> BridgeDiff:
+        """Run another mapping (a MappingDoc, a file or a shipped mapping's name) from now on, restarting only
         the bridges whose expansion changed; returns the difference (added, removed, changed). An invalid
         mapping raises MappingError and changes nothing."""
-        mapping = mapping if isinstance(mapping, Mapping) else load_mapping(mapping)
+        mapping = mapping if isinstance(mapping, MappingDoc) else load_mapping(mapping)
         diff = self.engine.apply_mapping(mapping)
         self.mapping = mapping
         return diff

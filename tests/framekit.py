@@ -7,7 +7,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.wire import protocol
 
 LIDAR_TOPIC = "/Sim/Scene/robots/Drone1/sensors/lidar1/lidar"
 POINTS = 5000

@@ -8,8 +8,12 @@ own group of it) or a lower one. Every module of the package is in exactly one l
 - convert/ does not import rospy (message classes and genpy.Time only);
 - nothing in the package imports the tools;
 - the package's imports have no circle, those under `if TYPE_CHECKING:` included;
-- from outside a subpackage (cli, convert, engine, mapping), only what its `__all__` names is imported: its
-  modules named there, or the names it exports (the engine's classes, imported from `airsim_mapper.engine`).
+- from outside a subpackage (cli, convert, engine, mapping, and each room of simserver), only what its
+  `__all__` names is imported: its modules named there, or the names it exports (the engine's classes,
+  imported from `airsim_mapper.engine`).
+The headless server (simserver) has rooms in the same way (`ROOMS`): its top modules; robot; sensors;
+scene; render; world and wire, peers; motion; errors, the base of every room. A simserver module imports
+only its own room or a lower one, and every simserver module is in exactly one room.
 Each rule has a self-test: an import injected against it is reported.
 """
 
@@ -26,7 +30,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "airsim_mapper"
 # Top to bottom; each layer a tuple of groups (peers), each group the module prefixes it holds.
-LAYERS: tuple[tuple[tuple[str, ...], ...], ...] = (
+Layers = tuple[tuple[tuple[str, ...], ...], ...]
+LAYERS: Layers = (
     (("airsim_mapper.cli",),),
     (("airsim_mapper.wrapper",),),
     (("airsim_mapper.engine",),),
@@ -48,6 +53,18 @@ LAYERS: tuple[tuple[tuple[str, ...], ...], ...] = (
     ),
 )
 PACKAGE_ROOT = "airsim_mapper"  # its __init__ holds the version only: below every layer
+SIM = "airsim_mapper.simserver"  # its __init__ holds a docstring only: below every room
+# The rooms of the headless server, top to bottom, in the shape of LAYERS.
+ROOMS: Layers = (
+    ((f"{SIM}.__main__", f"{SIM}.cli", f"{SIM}.server", f"{SIM}.session"),),
+    ((f"{SIM}.robot",),),
+    ((f"{SIM}.sensors",),),
+    ((f"{SIM}.scene",),),
+    ((f"{SIM}.render",),),
+    ((f"{SIM}.world",), (f"{SIM}.wire",)),
+    ((f"{SIM}.motion",),),
+    ((f"{SIM}.errors",),),
+)
 LEAVES = frozenset(LAYERS[-1][0])
 ROS_LIBRARIES = frozenset({"rospy", "genpy", "roslib", "rosgraph", "tf2_ros", "tf2_py", "message_filters"})
 
@@ -125,23 +142,24 @@ def in_layer(name: str, *layers: str) -> bool:
     return any(name == layer or name.startswith(f"{layer}.") for layer in layers)
 
 
-def place(name: str) -> tuple[int, int] | None:
+def place(name: str, layers: Layers = LAYERS) -> tuple[int, int] | None:
     """(layer, group) of a package module (a module imported as `pkg.name` counts as `pkg`'s); None for
-    the package root and for anything outside the package."""
-    for rank, groups in enumerate(LAYERS):
+    the package root and for anything outside the package (with ROOMS: the simserver's root and anything
+    outside the simserver)."""
+    for rank, groups in enumerate(layers):
         for group, prefixes in enumerate(groups):
             if in_layer(name, *prefixes):
                 return rank, group
     return None
 
 
-def layer_problems(graph: dict[str, set[str]]) -> list[str]:
+def layer_problems(graph: dict[str, set[str]], layers: Layers = LAYERS) -> list[str]:
     """Imports of a higher layer, or of a peer group of the same layer."""
     problems = []
     for module, targets in graph.items():
-        home = place(module)
+        home = place(module, layers)
         for target in targets:
-            there = place(target)
+            there = place(target, layers)
             if home is None or there is None or there == home:
                 continue
             if there[0] <= home[0]:  # upward, or a peer's
@@ -206,8 +224,14 @@ def circles(graph: dict[str, set[str]]) -> list[str]:
     return sorted(found)
 
 
+def room_problems(graph: dict[str, set[str]]) -> list[str]:
+    """Imports of a higher room of the simserver, or of a peer room."""
+    return layer_problems(graph, ROOMS)
+
+
 RULES = {
     "a module imports only its own layer or a lower one": layer_problems,
+    "a simserver module imports only its own room or a lower one": room_problems,
     "mapping and scene run without ROS": ros_free_problems,
     "convert does not import rospy": convert_problems,
     "the package never imports the tools": tools_problems,
@@ -226,18 +250,32 @@ def test_every_module_is_in_exactly_one_layer() -> None:
     assert len(prefixes) == len(set(prefixes))
 
 
+def test_every_simserver_module_is_in_exactly_one_room() -> None:
+    unplaced = [
+        name for name in parsed_package() if in_layer(name, SIM) and name != SIM and not place(name, ROOMS)
+    ]
+    assert unplaced == [], "add these modules to a room of ROOMS"
+    prefixes = [prefix for groups in ROOMS for group in groups for prefix in group]
+    assert len(prefixes) == len(set(prefixes))
+
+
 @pytest.mark.parametrize("run_time_only", [True, False], ids=["run-time imports", "type-checking ones too"])
 def test_the_imports_have_no_circle(run_time_only: bool) -> None:
     assert circles(package_graph(run_time_only=run_time_only)) == []
 
 
-def representative(rank: int, group: int) -> str:
+def representative(rank: int, group: int, layers: Layers = LAYERS) -> str:
     """A module of the package in that layer's group (the first by name)."""
-    return min(name for name in parsed_package() if place(name) == (rank, group))
+    return min(name for name in parsed_package() if place(name, layers) == (rank, group))
 
 
-GROUPS = [(rank, group) for rank, groups in enumerate(LAYERS) for group in range(len(groups))]
-FORBIDDEN = [(low, high) for low, high in itertools.permutations(GROUPS, 2) if high[0] <= low[0]]
+def forbidden(layers: Layers) -> list[tuple[tuple[int, int], tuple[int, int]]]:
+    """Each (lower, higher or peer) pair of groups: an import from the first of the second is forbidden."""
+    groups = [(rank, group) for rank, groups in enumerate(layers) for group in range(len(groups))]
+    return [(low, high) for low, high in itertools.permutations(groups, 2) if high[0] <= low[0]]
+
+
+FORBIDDEN = forbidden(LAYERS)
 
 
 @pytest.mark.parametrize(("low", "high"), FORBIDDEN, ids=lambda g: f"{LAYERS[g[0]][g[1]][0]}")
@@ -248,10 +286,22 @@ def test_an_import_of_a_higher_layer_or_a_peer_is_reported_for_each_pair(low, hi
     assert f"{module} imports {target}" in layer_problems(graph)
 
 
+@pytest.mark.parametrize(
+    ("low", "high"), forbidden(ROOMS), ids=lambda g: ROOMS[g[0]][g[1]][0].removeprefix(f"{SIM}.")
+)
+def test_an_import_of_a_higher_room_or_a_peer_is_reported_for_each_pair(low, high) -> None:
+    graph = package_graph()
+    module, target = representative(*low, ROOMS), representative(*high, ROOMS)
+    graph[module] = graph[module] | imported(f"def later():\n    import {target}", module)
+    assert f"{module} imports {target}" in room_problems(graph)
+
+
 def test_an_import_of_a_lower_layer_or_of_its_own_group_is_allowed() -> None:
     graph = package_graph()
     graph["airsim_mapper.engine.hub"] |= {"airsim_mapper.convert.frames", "airsim_mapper.engine.streams"}
+    graph[f"{SIM}.robot.robots"] |= {f"{SIM}.wire.outbox", f"{SIM}.robot.camera_services", f"{SIM}.errors"}
     assert layer_problems(graph) == []
+    assert room_problems(graph) == []
 
 
 @pytest.mark.parametrize(
@@ -294,7 +344,13 @@ def test_a_circle_is_reported_and_type_checking_imports_are_not_run_time_ones() 
     assert {"a", "a.b", "c"} <= imported(source, "m")
 
 
-FACES = ("airsim_mapper.cli", "airsim_mapper.convert", "airsim_mapper.engine", "airsim_mapper.mapping")
+FACES = (
+    "airsim_mapper.cli",
+    "airsim_mapper.convert",
+    "airsim_mapper.engine",
+    "airsim_mapper.mapping",
+    *(room for groups in ROOMS[1:-1] for group in groups for room in group),
+)
 
 
 def face(package: str) -> frozenset[str]:
@@ -344,12 +400,17 @@ def test_a_face_naming_what_its_package_neither_holds_nor_exports_is_reported() 
     assert face_gaps(engine, face(engine) | {"Engine", "core", "Nowhere"}) == ["Nowhere"]
 
 
-def test_an_import_behind_a_subpackages_face_is_reported() -> None:
+@pytest.mark.parametrize(
+    ("module", "target", "package"),
+    [
+        ("airsim_mapper.wrapper", "airsim_mapper.engine.streams", "airsim_mapper.engine"),
+        (f"{SIM}.session", f"{SIM}.render.gl_renderer", f"{SIM}.render"),
+    ],
+)
+def test_an_import_behind_a_subpackages_face_is_reported(module: str, target: str, package: str) -> None:
     graph = package_graph()
-    graph["airsim_mapper.wrapper"] |= {"airsim_mapper.engine.streams"}
-    assert face_problems(graph) == [
-        "airsim_mapper.wrapper imports airsim_mapper.engine.streams, not in airsim_mapper.engine.__all__"
-    ]
+    graph[module] |= {target}
+    assert face_problems(graph) == [f"{module} imports {target}, not in {package}.__all__"]
 
 
 def test_an_exported_name_is_imported_through_its_subpackage_not_from_its_module() -> None:

@@ -29,9 +29,9 @@ from airsim_mapper.rviz_radar import (
     return_points,
     scan_markers,
 )
-from airsim_mapper.simserver.radar_model import RadarModel
-from airsim_mapper.simserver.world_file import load_world
-from tools.screenshot import screenshot
+from airsim_mapper.simserver.sensors.radar_model import RadarModel
+from airsim_mapper.simserver.world.world_file import load_world
+from tools.screenshot import rviz_config, watch
 
 LAUNCH = ROOT / "launch" / "rviz.launch"
 RADAR_FRAME = "airsim_node/Drone1/radar1"
@@ -166,14 +166,14 @@ def test_every_topic_of_the_rviz_config_is_in_the_default_interface_or_made_by_t
     markers = launch_node_args("radar_markers.py")
     assert interface[markers["--scan"]] == "radar_msgs/RadarScan"
     assert markers["--convention"] == "frd"  # the default mapping's radar frame is FRD
-    topics = screenshot.config_topics()
+    topics = rviz_config.config_topics()
     assert topics.pop(markers["--markers"]) == "rviz/MarkerArray"
-    assert markers["--markers"] == screenshot.MARKER_TOPIC
+    assert markers["--markers"] == watch.MARKER_TOPIC
     assert set(topics.values()) == set(RVIZ_TYPES)  # images, the cloud and the odometry
     for topic, display in topics.items():
         assert topic in interface, f"{topic} ({display}) is not in the default mapping's interface"
         assert interface[topic] == RVIZ_TYPES[display], topic
-    assert {screenshot.IMAGE_TOPIC, screenshot.LIDAR_TOPIC, screenshot.ODOM_TOPIC} <= set(topics)
+    assert {watch.IMAGE_TOPIC, watch.LIDAR_TOPIC, watch.ODOM_TOPIC} <= set(topics)
 
 
 def test_every_frame_the_config_names_is_published_by_the_default_mapping():
@@ -181,7 +181,7 @@ def test_every_frame_the_config_names_is_published_by_the_default_mapping():
         ROOT / "mappings" / "default.yaml", "scene_drone_sensors.jsonc", ROOT / "sim_config", "projectairsim"
     )
     frames = {f for b in bridges if b.tf is not None for f in (b.tf.parent, b.tf.child)}
-    shown = screenshot.config_frames()
+    shown = rviz_config.config_frames()
     assert {"map", "airsim_node/Drone1", "airsim_node/Drone1/Chase/scene_camera"} <= shown
     assert shown <= frames
 

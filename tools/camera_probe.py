@@ -26,16 +26,16 @@ from typing import Any
 
 import pynng
 
-from airsim_mapper.simserver import protocol
-from airsim_mapper.simserver.camera_model import IMAGE_TYPES
-from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker
-from airsim_mapper.simserver.scene_spec import IMAGE_TYPE_NAMES, parse_scene
+from airsim_mapper.simserver.render.camera_model import IMAGE_TYPES
+from airsim_mapper.simserver.render.render_worker import RENDER_NICE, RenderWorker
+from airsim_mapper.simserver.scene.config import IMAGE_TYPE_NAMES, parse_scene
 from airsim_mapper.simserver.session import Session
-from airsim_mapper.simserver.topics import TopicHub
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.wire import protocol
+from airsim_mapper.simserver.wire.topics import TopicHub
+from airsim_mapper.simserver.world.world_file import load_world
 
 WIDTH, HEIGHT, HZ = 1280, 720, 30.0
-TARGET_HZ = 30.0  # issue: all seven types of one 1280x720 camera at 30 Hz on 2 cores (llvmpipe)
+TARGET_HZ = 30.0  # target: all seven types of one 1280x720 camera at 30 Hz on 2 cores (llvmpipe)
 
 
 def probe_scene(width: int, height: int, hz: float) -> dict[str, Any]:

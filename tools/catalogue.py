@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from airsim_mapper.convert.catalog import CONVERTERS, markdown_table
+from airsim_mapper.convert.catalog import CONVERTERS, converters_markdown
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES
 from airsim_mapper.resources import SCHEMA_PATH
 
@@ -33,7 +33,7 @@ def doc_text(text: str) -> str:
     """docs/converters.md with the table between its markers made from the catalogue."""
     head, rest = text.split(BEGIN, 1)
     _old, tail = rest.split(END, 1)
-    return f"{head}{BEGIN}\n{markdown_table()}{END}{tail}"
+    return f"{head}{BEGIN}\n{converters_markdown()}{END}{tail}"
 
 
 def main(argv: list[str] | None = None) -> int:

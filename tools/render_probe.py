@@ -14,18 +14,16 @@ Wall ms per render, median. embreex is not a project dependency: `pip install em
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from collections.abc import Callable
 
 import numpy as np
 
 from airsim_mapper.geometry import quat_to_matrix
-from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world
-from tools.bench.renderers import POSES
+from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world
+from tools.render_timing import POSES, median_ms
 
 WIDTH, HEIGHT, FOV = 1280, 720, 90.0
 
@@ -113,16 +111,6 @@ def embree_hits(world: World, segments: int) -> Callable[[int], object]:
     return hits
 
 
-def timed(fn: Callable[[int], object], renders: int) -> float:
-    fn(0)
-    samples = []
-    for i in range(renders):
-        start = time.perf_counter()
-        fn(i)
-        samples.append((time.perf_counter() - start) * 1e3)
-    return statistics.median(samples)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--renders", type=int, default=20)
@@ -138,13 +126,13 @@ def main() -> None:
         return lambda i: gl.render(world, RenderRequest(*POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, types))
 
     rows = {
-        "embree: hits only": timed(embree_hits(world, args.sphere_segments), args.renders),
-        "embree: hits + numpy scene shading": timed(
+        "embree: hits only": median_ms(embree_hits(world, args.sphere_segments), args.renders),
+        "embree: hits + numpy scene shading": median_ms(
             embree_scene_render(world, args.sphere_segments), args.renders
         ),
-        "gl: scene image": timed(gl_types([camera_model.SCENE]), args.renders),
-        "gl: all seven types": timed(gl_types(list(camera_model.IMAGE_TYPES)), args.renders),
-        "raycast: scene image": timed(
+        "gl: scene image": median_ms(gl_types([camera_model.SCENE]), args.renders),
+        "gl: all seven types": median_ms(gl_types(list(camera_model.IMAGE_TYPES)), args.renders),
+        "raycast: scene image": median_ms(
             lambda i: raycast_renderer.render_raycast(
                 world, RenderRequest(*POSES[i % len(POSES)], WIDTH, HEIGHT, FOV, [0])
             ),

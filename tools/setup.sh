@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Idempotent, complete setup: Debian's ROS1 packages, the venv, the project and its pinned dependencies,
 # and the message space devel/ (radar_msgs/uuid_msgs for the venv and, sourced, for ROS's own tools). A second run with everything present changes nothing.
+# Then .venv-ros2 for the ROS 2 flavour (tools/setup_ros2.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -49,3 +50,6 @@ fi
 # 4. radar_msgs / uuid_msgs, generated from msg/ into devel/ (source devel/setup.bash for rostopic, rosbag,
 #    rosmsg), md5sums verified; a .pth file puts their Python on the venv's path.
 .venv/bin/python tools/gen_msgs.py
+
+# 5. ROS 2: .venv-ros2 with the ROS 2 wheels, the project, and tf2_msgs/radar_msgs generated into it.
+bash tools/setup_ros2.sh

@@ -32,7 +32,8 @@ import threading
 import time
 from typing import TYPE_CHECKING, Any
 
-from airsim_mapper.cli.errors import SettingError
+from airsim_mapper.cli.errors import FlavourError, SettingError
+from airsim_mapper.cli.flavour import FLAVOURS, choose, requested
 from airsim_mapper.cli.limits import raise_open_files, shortfall
 from airsim_mapper.cli.settings import (
     SETTINGS,
@@ -55,6 +56,7 @@ __all__ = ["SETTINGS", "SettingError", "connect", "given_settings", "main", "par
 __all__ += ["run", "values"]
 
 log = ros_logger("airsim_mapper.node")
+ROS2_NOT_YET = "ROS 2: rclpy is here, but this version of the node runs on ROS1 only (--ros 1, from .venv)"
 WAITING_FOR_SCENE = "no --scene: waiting for a scene file name on"  # logged with the topic, once waiting
 
 
@@ -99,6 +101,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         type=float,
         default=MAX_FRAME_MB,
         help=f"larger simulator frames are dropped, counted as oversized_frames (default {MAX_FRAME_MB:g})",
+    )
+    parser.add_argument(
+        "--ros",
+        choices=sorted(FLAVOURS),
+        default=None,
+        help="the ROS to run on: 1 (rospy, .venv) or 2 (rclpy, .venv-ros2); default: the one importable",
     )
     args = parser.parse_args(argv)
     if not args.shutdown_timeout > 0:
@@ -161,7 +169,7 @@ def listening(uri: str, timeout: float) -> bool:
     return accepts_connections(host, number, timeout)
 
 
-def prepare(
+def prepare_node(
     settings: dict[str, Any],
     node_name: str,
     namespace: str,
@@ -169,10 +177,10 @@ def prepare(
     node_namespace: str = "",
 ) -> Prepared:
     """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings)."""
-    from airsim_mapper.mapping.pipeline import prepare as prepare_pipeline
+    from airsim_mapper.mapping.pipeline import prepare
 
     sources = (settings["mapping"], settings["scene"], settings["simconfigpath"])
-    return prepare_pipeline(*sources, node_name, namespace, known, node_namespace)
+    return prepare(*sources, node_name, namespace, known, node_namespace)
 
 
 def config_problem(
@@ -184,7 +192,7 @@ def config_problem(
 ) -> tuple[Prepared | None, str | None]:
     """(prepared, None), or (None, what to print) when the mapping or scene is invalid."""
     try:
-        return prepare(settings, node_name, namespace, known, node_namespace), None
+        return prepare_node(settings, node_name, namespace, known, node_namespace), None
     except ConfigError as exc:
         return None, str(exc)
     except OSError as exc:
@@ -221,9 +229,17 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     for number in early_signals or ():
         stop(number, None)
     files_before, files = raise_open_files()
+    argv = sys.argv if argv is None else argv
+    try:
+        if choose(requested(argv[1:])) == "2":
+            print(f"airsim-mapper-node: {ROS2_NOT_YET}", file=sys.stderr)
+            return 1
+    except FlavourError as exc:
+        print(f"airsim-mapper-node: {exc}", file=sys.stderr)
+        return 1
     import rospy
 
-    args = parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])
+    args = parse_args(rospy.myargv(argv)[1:])
     stop.timeout = args.shutdown_timeout
     from airsim_mapper.cli.validate import format_table
 

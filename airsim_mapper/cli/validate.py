@@ -13,18 +13,24 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from airsim_mapper.cli.arguments import (
+    EXIT_INVALID,
+    EXIT_OK,
+    EXIT_USAGE,
+    MAPPING_HELP,
+    add_scene_arguments,
+    parse,
+)
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.expand import selected
 from airsim_mapper.mapping.match import describe
-from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
-from airsim_mapper.resources import mapping_path, sim_config_dir
+from airsim_mapper.resources import mapping_path
 from airsim_mapper.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
-
-EXIT_OK, EXIT_INVALID, EXIT_USAGE = 0, 1, 2
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -32,7 +38,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="validate-mapping",
         description="Validate an airsim-mapper mapping YAML (and expand it over a scene).",
     )
-    parser.add_argument("mapping", help="the mapping YAML file, or a shipped mapping's name (default, enu)")
+    parser.add_argument("mapping", help=MAPPING_HELP)
     parser.add_argument(
         "new",
         nargs="?",
@@ -40,13 +46,7 @@ def _parser() -> argparse.ArgumentParser:
         "running node's live reload would do)",
     )
     parser.add_argument("--scene", help="a scene config file name inside --simconfigpath: print its bridges")
-    parser.add_argument(
-        "--simconfigpath",
-        default=None,
-        help="the scene config directory (default: ./sim_config/, else the package's sample scenes)",
-    )
-    parser.add_argument("--nodename", default="projectairsim", help="the node name for <node_name>")
-    parser.add_argument("--namespace", default="", help="the value of <namespace> (default: empty)")
+    add_scene_arguments(parser)
     parser.add_argument(
         "--format",
         choices=("text", "json"),
@@ -103,12 +103,9 @@ def resolved_yaml(spec: str) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run validate-mapping with `argv` (default: sys.argv[1:]); return the exit status."""
-    try:
-        args = _parser().parse_args(argv)
-        if hasattr(args, "simconfigpath"):
-            args.simconfigpath = sim_config_dir(args.simconfigpath)
-    except SystemExit as stop:  # argparse has printed the usage message
-        return EXIT_OK if stop.code == 0 else EXIT_USAGE
+    args = parse(_parser(), argv)
+    if isinstance(args, int):  # usage or help printed
+        return args
     try:
         if args.new is not None:
             if args.scene is None:
@@ -149,7 +146,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def match_report(
-    mapping: Mapping, scene: Scene, node_name: str, namespace: str
+    mapping: MappingDoc, scene: Scene, node_name: str, namespace: str
 ) -> tuple[list[str], list[str]]:
     """What each rule's `match` selected in `scene` (one line a rule), and a warning for each rule whose
     `match` selects nothing there (FILE:LINE: warning: ...)."""

@@ -17,7 +17,7 @@ from sensor_msgs.msg import CameraInfo
 from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 DEFAULT_FOV_DEGREES = 90.0
 DISTORTION_MODEL = "plumb_bob"
@@ -56,7 +56,7 @@ def camera_info(msg: Mapping[str, Any], ctx: ConvertContext) -> CameraInfo:
     fov = sim_fields.number(ctx.source.get("fov-degrees", DEFAULT_FOV_DEGREES), "camera_info: fov-degrees")
     d, k, r, p = intrinsics(width, height, fov)
     return CameraInfo(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         height=height,
         width=width,
         distortion_model=DISTORTION_MODEL,

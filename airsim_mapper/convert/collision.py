@@ -14,7 +14,7 @@ from geometry_msgs.msg import Point, PointStamped
 
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 
 @sim_fields.converter("collision")
@@ -23,4 +23,4 @@ def collision(msg: Mapping[str, Any], ctx: ConvertContext) -> PointStamped:
     point = sim_fields.vector3(msg, "impact_point")
     if ctx.enu:
         point = frames.ned_to_enu(point)
-    return PointStamped(header=header(msg, ctx), point=Point(*(float(v) for v in point)))
+    return PointStamped(header=sim_header(msg, ctx), point=Point(*(float(v) for v in point)))

@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 
 from airsim_mapper.convert import frames, sim_fields
-from airsim_mapper.convert.catalog import VELOCITY_FRAMES
 from airsim_mapper.convert.context import ConvertContext
+from airsim_mapper.convert.entries.commands import VELOCITY_FRAMES
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.logs import shorten
 

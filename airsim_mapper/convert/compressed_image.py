@@ -24,7 +24,7 @@ from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 FORMAT = "bgr8; png compressed bgr8"  # compressed_image_transport's "<encoding>; png compressed <target>"
 COMPRESSED = "PNG"  # the simulator's encoding of a compressed colour image
@@ -69,4 +69,4 @@ def compressed_image(msg: Mapping[str, Any], ctx: ConvertContext) -> CompressedI
         raise ConversionError(
             f"the PNG header says {header_width}x{header_height}, the message {width}x{height}"
         )
-    return BufferCompressedImage(header=header(msg, ctx), format=FORMAT, data=data)
+    return BufferCompressedImage(header=sim_header(msg, ctx), format=FORMAT, data=data)

@@ -32,7 +32,7 @@ from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 
 @dataclass(frozen=True)
@@ -212,7 +212,7 @@ def image(msg: Mapping[str, Any], ctx: ConvertContext) -> Image:
         if spec.ros == "32FC1":
             data = as_bytes_view(_float_pixels(encoding, data, height, width, order))
     return BufferImage(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         height=height,
         width=width,
         encoding=spec.ros,

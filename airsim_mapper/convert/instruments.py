@@ -31,7 +31,7 @@ from sensor_msgs.msg import BatteryState, FluidPressure, Imu, MagneticField, Nav
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 TESLA_PER_GAUSS = 1e-4
 DEFAULT_MIN_RANGE_M = 0.2
@@ -82,7 +82,7 @@ def imu(msg: Mapping[str, Any], ctx: ConvertContext) -> Imu:
         q = frames.ned_frd_to_enu_flu(q)
     w, x, y, z = (float(v) for v in q)
     return Imu(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         orientation=Quaternion(x, y, z, w) if has_orientation else Quaternion(0.0, 0.0, 0.0, 0.0),
         orientation_covariance=(
             diagonal_covariance(ctx.params.get("orientation_variance"), "orientation_variance")
@@ -125,7 +125,7 @@ def gps(msg: Mapping[str, Any], ctx: ConvertContext) -> NavSatFix:
         service=NavSatStatus.SERVICE_GPS,
     )
     return NavSatFix(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         status=status,
         latitude=latitude,
         longitude=longitude,
@@ -138,7 +138,7 @@ def gps(msg: Mapping[str, Any], ctx: ConvertContext) -> NavSatFix:
 def _pressure(msg: Mapping[str, Any], ctx: ConvertContext, key: str) -> FluidPressure:
     variance = sim_fields.number(ctx.params.get("variance", 0.0), "variance")
     return FluidPressure(
-        header=header(msg, ctx), fluid_pressure=sim_fields.number_field(msg, key), variance=variance
+        header=sim_header(msg, ctx), fluid_pressure=sim_fields.number_field(msg, key), variance=variance
     )
 
 
@@ -170,7 +170,7 @@ def magnetometer(msg: Mapping[str, Any], ctx: ConvertContext) -> MagneticField:
         field_tesla = frames.frd_to_flu(field_tesla)
         covariance = frames.frd_to_flu_covariance(covariance)
     return MagneticField(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         magnetic_field=_vector(field_tesla),
         magnetic_field_covariance=[float(v) for v in covariance],
     )
@@ -186,7 +186,7 @@ def distance(msg: Mapping[str, Any], ctx: ConvertContext) -> Range:
     max_range = sim_fields.number(ctx.source.get("max-distance", DEFAULT_MAX_RANGE_M), "max-distance")
     fov = sim_fields.number(ctx.params.get("field_of_view", 0.0), "field_of_view")
     return Range(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         radiation_type=Range.INFRARED,
         field_of_view=fov,
         min_range=min_range,
@@ -204,7 +204,7 @@ def battery(msg: Mapping[str, Any], ctx: ConvertContext) -> BatteryState:
         raise ConversionError(f"battery_charge_state must be a string, got {state!r}")
     nan = float("nan")
     return BatteryState(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         voltage=nan,
         temperature=nan,
         current=nan,

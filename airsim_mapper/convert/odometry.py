@@ -24,7 +24,7 @@ from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.pose import ros_pose
-from airsim_mapper.convert.stamps import header, sim_stamp
+from airsim_mapper.convert.stamps import sim_header, sim_stamp
 from airsim_mapper.geometry import Quat, Vec3, q_conjugate, q_mul, q_normalized, q_rotate
 
 ODOMETRY_KEY = "odometry"
@@ -87,7 +87,7 @@ def odometry(msg: Mapping[str, Any], ctx: ConvertContext) -> Odometry:
         if t_ns > previous.t_ns:
             linear, angular = body_twist(previous, position, q, (t_ns - previous.t_ns) / 1e9)
     ctx.state[ODOMETRY_KEY] = PoseSample(t_ns, position, q, linear, angular)
-    out = Odometry(header=header(msg, ctx), child_frame_id=child)
+    out = Odometry(header=sim_header(msg, ctx), child_frame_id=child)
     out.pose.pose = ros_pose(position, q)
     out.twist.twist = Twist(Vector3(*linear), Vector3(*angular))
     return out

@@ -20,7 +20,7 @@ from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.buffer_data import BufferData
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 POINT_DTYPE = np.dtype(
     [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "<f4"), ("segmentation", "<i4")]
@@ -96,7 +96,7 @@ def pointcloud(msg: Mapping[str, Any], ctx: ConvertContext) -> PointCloud2:
     cloud["intensity"] = _optional(msg, "intensity_cloud", "<f4", count)
     cloud["segmentation"] = _optional(msg, "segmentation_cloud", "<i4", count)
     return BufferPointCloud2(
-        header=header(msg, ctx),
+        header=sim_header(msg, ctx),
         height=1,
         width=count,
         fields=point_fields(),

@@ -12,7 +12,7 @@ from geometry_msgs.msg import Pose, PoseStamped
 from airsim_mapper.convert import frames, messages, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 from airsim_mapper.geometry import OriginError, compose, parse_origin
 
 CAMERA_POSE_KEY = "camera_pose"
@@ -33,10 +33,10 @@ def world_pose(position: Any, q_ned_frd: Any, ctx: ConvertContext) -> Pose:
 
 
 @sim_fields.converter("pose")
-def pose_stamped(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
+def robot_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     """sim PoseStamped {time_stamp, position, orientation} -> geometry_msgs/PoseStamped."""
     position, q = sim_fields.pose_floats(msg)
-    return messages.pose_stamped(header(msg, ctx), world_pose(position, q, ctx))
+    return messages.pose_stamped(sim_header(msg, ctx), world_pose(position, q, ctx))
 
 
 def camera_pose_key(robot_name: str | None, camera_name: str | None) -> tuple[str, Any, Any]:
@@ -102,7 +102,7 @@ def mounted(msg: Mapping[str, Any], mount: tuple[np.ndarray, np.ndarray]) -> tup
 def camera_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     """The ROBOT's sim PoseStamped composed with the camera mount -> the camera's world PoseStamped."""
     position, q = mounted(msg, camera_mount(ctx))
-    return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
+    return PoseStamped(header=sim_header(msg, ctx), pose=world_pose(position, q, ctx))
 
 
 @sim_fields.converter("sensor_pose")
@@ -113,7 +113,7 @@ def sensor_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStamped:
     pose, whether or not anyone subscribes to its data.
     """
     position, q = mounted(msg, config_mount(ctx, "origin"))
-    return PoseStamped(header=header(msg, ctx), pose=world_pose(position, q, ctx))
+    return PoseStamped(header=sim_header(msg, ctx), pose=world_pose(position, q, ctx))
 
 
 @sim_fields.converter("camera_optical_pose")
@@ -123,5 +123,5 @@ def camera_optical_pose(msg: Mapping[str, Any], ctx: ConvertContext) -> PoseStam
     if ctx.enu:
         position, q = frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q)
     return PoseStamped(
-        header=header(msg, ctx), pose=ros_pose(position, frames.body_to_optical(q, ctx.convention))
+        header=sim_header(msg, ctx), pose=ros_pose(position, frames.body_to_optical(q, ctx.convention))
     )

@@ -27,7 +27,7 @@ from uuid_msgs.msg import UniqueID
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.stamps import header
+from airsim_mapper.convert.stamps import sim_header
 
 RCS_FLOOR_SQM = 1e-10
 AMPLITUDE_FLOOR_DB = -100.0
@@ -71,7 +71,7 @@ def radar_scan(msg: Mapping[str, Any], ctx: ConvertContext) -> RadarScan:
     amplitude = amplitude_db(rcs)
     rows = np.column_stack([rng, azimuth, elevation, velocity, amplitude]).tolist()
     returns = [RadarReturn(r, a, e, v, amp) for r, a, e, v, amp in rows]
-    return RadarScan(header=header(msg, ctx), returns=returns)
+    return RadarScan(header=sim_header(msg, ctx), returns=returns)
 
 
 def track_uuid(track_id: Any) -> UniqueID:
@@ -125,4 +125,4 @@ def radar_tracks(msg: Mapping[str, Any], ctx: ConvertContext) -> RadarTracks:
         )
         for uid, p, v, a in zip(ids, positions, velocities, accels)
     ]
-    return RadarTracks(header=header(msg, ctx), tracks=out)
+    return RadarTracks(header=sim_header(msg, ctx), tracks=out)

@@ -37,7 +37,7 @@ def sim_stamp(msg: Mapping[str, Any]) -> Time:
     return convert_stamp(msg["time_stamp"])
 
 
-def header(msg: Mapping[str, Any], ctx: ConvertContext) -> Header:
+def sim_header(msg: Mapping[str, Any], ctx: ConvertContext) -> Header:
     """A fresh std_msgs/Header with the context's frame id and the sim (or ROS) stamp."""
     if ctx.stamp == STAMP_ROS:
         if ctx.now is None:

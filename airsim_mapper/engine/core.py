@@ -35,7 +35,7 @@ from airsim_mapper.engine.supervisor import Supervisor
 from airsim_mapper.logs import RateLimitedLog, ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.expand import expand
-from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.names import ros_namespace
 from airsim_mapper.mapping.report import format_table
 from airsim_mapper.scene import Scene, read_scene
@@ -54,7 +54,7 @@ class Engine:
     def __init__(
         self,
         client: Any,
-        mapping: Mapping,
+        mapping: MappingDoc,
         names: NodeNames,
         sim: SimAccess,
         ros: RosLink | None = None,
@@ -210,7 +210,7 @@ class Engine:
             del self.bridges[name]
 
     # --- mappings ---------------------------------------------------------------------------
-    def apply_mapping(self, mapping: Mapping) -> BridgeDiff:
+    def apply_mapping(self, mapping: MappingDoc) -> BridgeDiff:
         """Run `mapping` instead of the current one, touching only what differs: bridges whose expanded
         spec is unchanged keep running (their publishers, subscribers and simulator subscriptions), removed
         and changed ones stop, new and changed ones start. Without a scene that is the node's own bridges.
@@ -226,8 +226,8 @@ class Engine:
                     log.exception("stopping %s failed", name)
             self._start_bridges(specs, {*diff.added, *diff.changed})
             if self._freeze_heap:
-                # No full collection here (freeze_heap's would stop every running bridge for tens of ms, and
-                # 50-130 ms on a busy machine): the new objects join the frozen heap as they are. The stopped
+                # No full collection here (freeze_heap's would stop every running bridge while it walks the
+                # whole heap): the new objects join the frozen heap as they are. The stopped
                 # bridges were freed by reference counting as they stopped: they hold no reference cycle
                 # (tests/engine/test_freed_on_stop.py; a cycle frozen here would stay for good).
                 gc.freeze()

@@ -17,7 +17,7 @@ from typing import Any
 from airsim_mapper.errors import ConfigError
 from airsim_mapper.logs import ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff
-from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.mapping.model import MappingDoc
 
 log = ros_logger("airsim_mapper.mapping")
 POLL_PERIOD_S = 0.25
@@ -87,8 +87,8 @@ class MappingReloader:
         self,
         engine: Any,
         spec: str,
-        mapping: Mapping,
-        load: Callable[[str], Mapping] | None = None,
+        mapping: MappingDoc,
+        load: Callable[[str], MappingDoc] | None = None,
         period_s: float = POLL_PERIOD_S,
     ) -> None:
         from airsim_mapper.mapping.loader import load_mapping

@@ -1,7 +1,7 @@
 """The mapping language: load and validate a mapping YAML, and expand its rules over a scene.
 
 Its face (`__all__`, the modules the layers above import): `loader`, `expand`, `pipeline` (both in one
-call), `model` (Mapping, BridgeSpec), `errors`, `diff`, `report`, `match`, `names` and `extends` (what the
+call), `model` (MappingDoc, BridgeSpec), `errors`, `diff`, `report`, `match`, `names` and `extends` (what the
 command line shows of a mapping), `reserved` (the names the node owns, its status topic's among them).
 Everything else is the mapping layer's own.
 """

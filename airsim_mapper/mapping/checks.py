@@ -26,6 +26,13 @@ from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
 IMAGE_BOUNDS = ("max_pixels", "max_bytes")  # what a converter marked max_pixels in the catalogue takes
+# the image_transport converters' params (ranges in the schema), with the image kinds that take each
+TRANSPORT_PARAMS = {
+    "jpeg_quality": (catalog.COLOUR,),
+    "png_level": (catalog.COLOUR, catalog.FLOAT),
+    "depth_max": (catalog.FLOAT,),
+    "depth_quantization": (catalog.FLOAT,),
+}
 
 
 class _Checker:
@@ -182,6 +189,15 @@ class _Checker:
                 self.add(
                     (*base, "params", key),
                     f"rule '{rule.name}': params.{key} must be a positive integer, got {value!r}",
+                )
+        kind = getattr(catalog.find(rule.converter), "image_kind", None)
+        for key, kinds in TRANSPORT_PARAMS.items():
+            if key in rule.params and kind not in kinds:
+                takers = [c.name for c in catalog.CONVERTERS.values() if c.image_kind in kinds]
+                self.add(
+                    (*base, "params", key),
+                    f"rule '{rule.name}': params.{key} applies only to {' and '.join(takers)}",
+                    True,
                 )
         if rule.direction == SIM_TO_ROS:
             for key in ("watchdog_s", "limits"):

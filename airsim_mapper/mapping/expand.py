@@ -25,12 +25,11 @@ from types import MappingProxyType
 from typing import Any
 
 from airsim_mapper.convert import catalog
-from airsim_mapper.image_types import SIM_IMAGE_LEAVES
+from airsim_mapper.image_types import FLOAT_IMAGE_TYPES, SIM_IMAGE_LEAVES
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.match import matches
-from airsim_mapper.mapping.model import BridgeSpec, Rule, TfSpec
-from airsim_mapper.mapping.model import Mapping as MappingDoc
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc, Rule, TfSpec
 from airsim_mapper.mapping.names import resolve_name, ros_name_problem
 from airsim_mapper.mapping.origins import place_text
 from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem
@@ -154,6 +153,24 @@ def _bridge(rule: Rule, key: str, variables: dict[str, str], source: dict[str, A
     )
 
 
+def _image_kind_problem(bridge: BridgeSpec) -> str | None:
+    """Why an image-encoding converter cannot take the bridge's image type (JPEG of a depth image), if so."""
+    info = catalog.find(bridge.converter)
+    type_id = bridge.variables.get("image_type_id")
+    if info is None or info.image_kind is None or type_id is None:
+        return None
+    is_float = int(type_id) in FLOAT_IMAGE_TYPES
+    if is_float == (info.image_kind == catalog.FLOAT):
+        return None
+    kind = "a float depth image" if is_float else "an 8-bit colour image"
+    other = [c.name for c in catalog.CONVERTERS.values() if c.image_kind not in (None, info.image_kind)]
+    return (
+        f"bridge {bridge.name}: converter '{info.name}' cannot encode image type {type_id} "
+        f"({bridge.variables.get('image_type')}, {kind}): use {' or '.join(other)}, or a match on "
+        "image_type_id that leaves it out"
+    )
+
+
 def namespace_variables(namespace: str) -> dict[str, str]:
     """<namespace> ("" or "/ns", a topic prefix) and <frame_prefix> ("" or "ns/") of a node's --namespace."""
     ns = namespace.strip("/")
@@ -192,6 +209,9 @@ def expand(
                     names = {k: camera[k] for k in ("robot_name", "camera_name")}
                     camera["frame_id"] = template.render(rule.frame_id, {**variables, **names})
             bridge = _bridge(rule, key, variables, source)
+            unfit = _image_kind_problem(bridge)
+            if unfit:
+                problems.append(Problem(rule.file or mapping.source, rule.line, 1, unfit))
             if bridge.ros is not None:
                 at = rule.ros_place or (rule.file or mapping.source, rule.line, 1)  # its `ros`, or the rule
                 why = ros_name_problem(bridge.ros)

@@ -17,7 +17,15 @@ from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.extends import is_bare_name, resolve, shipped_hint
 from airsim_mapper.mapping.match import selections_of
-from airsim_mapper.mapping.model import DOMAIN_VARIABLES, Limits, Mapping, Options, PositionBox, Rule, TfSpec
+from airsim_mapper.mapping.model import (
+    DOMAIN_VARIABLES,
+    Limits,
+    MappingDoc,
+    Options,
+    PositionBox,
+    Rule,
+    TfSpec,
+)
 from airsim_mapper.mapping.origins import Origins, file_of, located
 from airsim_mapper.mapping.reserved import literal_problem
 from airsim_mapper.mapping.schema import schema_problems
@@ -36,7 +44,7 @@ PUBLISHING_KEYS = frozenset(
 ) - {"enabled"}
 
 
-def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
+def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> MappingDoc:
     """Read, validate and build the mapping in `path` (a file, or a shipped mapping's name: see
     resources.mapping_path); raise MappingError with every problem found.
 
@@ -54,7 +62,7 @@ def load_mapping(path: str | Path, limits: YamlLimits | None = None) -> Mapping:
     return load_mapping_text(text, file, limits)
 
 
-def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | None = None) -> Mapping:
+def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | None = None) -> MappingDoc:
     """Validate and build a mapping from YAML text; `file` names it in messages."""
     data, marks = load_marked(text, file, limits)
     if not isinstance(data, dict):
@@ -102,7 +110,7 @@ def load_mapping_text(text: str, file: str = "<string>", limits: YamlLimits | No
         raise MappingError(sorted(set(problems)))
     image_types = data.get("image_types")
     table = {int(k): v for k, v in image_types.items()} if image_types else dict(DEFAULT_IMAGE_TYPES)
-    return Mapping(
+    return MappingDoc(
         version=data["version"],
         image_types=MappingProxyType(dict(sorted(table.items()))),
         defaults=defaults,

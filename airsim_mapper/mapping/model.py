@@ -1,12 +1,12 @@
 """Plain immutable values of the mapping language: options, rules, and the expanded bridges.
 
-`Mapping` is what the loader returns for a YAML file; `BridgeSpec` is one concrete bridge that expansion
+`MappingDoc` is what the loader returns for a YAML file; `BridgeSpec` is one concrete bridge that expansion
 produces from a rule and a scene. Nothing here imports ROS or the simulator client.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping as MappingABC
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -100,20 +100,20 @@ class Rule:
     tf: TfSpec | None
     convention: str  # "ned" or "enu"
     options: Options
-    params: MappingABC[str, Any]  # free-form converter parameters (e.g. body_frame, method params)
+    params: Mapping[str, Any]  # free-form converter parameters (e.g. body_frame, method params)
     line: int = 0  # 1-based line of the rule in its file, for messages
     ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)
     # selections, any of which keeps an element; each maps a variable to glob patterns ("!" = none of);
     # empty: every element (see mapping.match)
-    match: tuple[MappingABC[str, tuple[str, ...]], ...] = ()
+    match: tuple[Mapping[str, tuple[str, ...]], ...] = ()
     file: str = ""  # the file the rule (or its override) is written in, when not the mapping's own
     ros_place: tuple[str, int, int] | None = None  # file, line and column of its `ros` value, when known
 
 
 @dataclass(frozen=True)
-class Mapping:
+class MappingDoc:
     version: int
-    image_types: MappingABC[int, str]  # image-type id -> <image_type> name
+    image_types: Mapping[int, str]  # image-type id -> <image_type> name
     defaults: Options
     rules: tuple[Rule, ...]
     source: str = "<string>"  # file the mapping came from
@@ -136,7 +136,7 @@ class BridgeSpec:
     tf: TfSpec | None  # concrete parent/child frame ids
     convention: str
     options: Options
-    params: MappingABC[str, Any]
-    variables: MappingABC[str, str]  # the template variables this bridge was expanded with
-    source: MappingABC[str, Any]  # the scene element it came from (capture setting, sensor config, ...)
+    params: Mapping[str, Any]
+    variables: Mapping[str, str]  # the template variables this bridge was expanded with
+    source: Mapping[str, Any]  # the scene element it came from (capture setting, sensor config, ...)
     ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)

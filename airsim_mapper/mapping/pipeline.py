@@ -13,7 +13,7 @@ from pathlib import Path
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.mapping.model import BridgeSpec, Mapping
+from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.scene import Scene, read_scene
 
@@ -27,7 +27,7 @@ class Prepared:
     sources: tuple[str, str, str]  # (mapping, scene file, sim config directory) it was made from
     node_name: str
     namespace: str
-    mapping: Mapping
+    mapping: MappingDoc
     scene: Scene | None = None
     specs: tuple[BridgeSpec, ...] | None = None
     node_namespace: str = ""  # the node's ROS namespace, where its relative names resolve
@@ -65,7 +65,7 @@ def load_and_expand(
     simconfigpath: str | Path,
     node_name: str,
     namespace: str = "",
-) -> tuple[Mapping, Scene, tuple[BridgeSpec, ...]]:
+) -> tuple[MappingDoc, Scene, tuple[BridgeSpec, ...]]:
     """Load the mapping, read the scene, expand; raise MappingError or SceneConfigError (both ConfigError)."""
     if not scene_file:
         read_scene(simconfigpath, scene_file)  # refuses the empty name as it refuses any other

@@ -11,8 +11,8 @@ import threading
 from collections.abc import Sequence
 
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT, port
-from airsim_mapper.simserver import rendering
-from airsim_mapper.simserver.render_worker import RENDER_NICE
+from airsim_mapper.simserver.render import rendering
+from airsim_mapper.simserver.render.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
 from airsim_mapper.tuning import tune_threads
 

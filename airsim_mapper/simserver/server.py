@@ -12,13 +12,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
-from airsim_mapper.simserver.objects import LiveWorld
-from airsim_mapper.simserver.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
-from airsim_mapper.simserver.scene_spec import SceneSpec, SceneSpecError, default_scene, parse_scene
-from airsim_mapper.simserver.services import MethodTable, ServiceError, ServiceServer
+from airsim_mapper.simserver.render.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
+from airsim_mapper.simserver.scene.config import SceneSpec, SceneSpecError, default_scene, parse_scene
+from airsim_mapper.simserver.scene.objects import LiveWorld
 from airsim_mapper.simserver.session import TRAJECTORY_KEYS, Session, TrajectoryStore
-from airsim_mapper.simserver.topics import TopicHub
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.wire.services import MethodTable, ServiceError, ServiceServer
+from airsim_mapper.simserver.wire.topics import TopicHub
+from airsim_mapper.simserver.world.world_file import load_world
 
 LOG = logging.getLogger("airsim_mapper.simserver")
 

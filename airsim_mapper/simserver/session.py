@@ -8,18 +8,20 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver import messages
-from airsim_mapper.simserver.camera_stream import Render
-from airsim_mapper.simserver.env_actors import TRAJECTORY_OFFSETS, EnvActors
-from airsim_mapper.simserver.objects import LiveWorld, Pose, SceneObjects
-from airsim_mapper.simserver.robot_services import robot_methods
-from airsim_mapper.simserver.robots import RobotRuntime
-from airsim_mapper.simserver.scene_spec import EARTH_RADIUS_M, SceneSpec, topic_table
-from airsim_mapper.simserver.services import Method, ServiceError
-from airsim_mapper.simserver.sim_clock import SimClock
-from airsim_mapper.simserver.topics import TopicHub, TopicInfo
-from airsim_mapper.simserver.visual_noops import VisualSettings
-from airsim_mapper.simserver.world import World
+from airsim_mapper.simserver.robot.robot_services import robot_methods
+from airsim_mapper.simserver.robot.robots import RobotRuntime
+from airsim_mapper.simserver.scene.config import SceneSpec
+from airsim_mapper.simserver.scene.env_actors import TRAJECTORY_OFFSETS, EnvActors
+from airsim_mapper.simserver.scene.geo import EARTH_RADIUS_M
+from airsim_mapper.simserver.scene.objects import LiveWorld, Pose, SceneObjects
+from airsim_mapper.simserver.scene.sim_clock import SimClock
+from airsim_mapper.simserver.scene.topic_table import topic_table
+from airsim_mapper.simserver.scene.visual_noops import VisualSettings
+from airsim_mapper.simserver.sensors.camera_stream import Render
+from airsim_mapper.simserver.wire import messages
+from airsim_mapper.simserver.wire.services import Method, ServiceError
+from airsim_mapper.simserver.wire.topics import TopicHub, TopicInfo
+from airsim_mapper.simserver.world.world import World
 
 GEO_KEYS = ("latitudes", "longitudes", "altitudes")
 GEO_ANGLES = ("pose_roll", "pose_pitch", "pose_yaw")

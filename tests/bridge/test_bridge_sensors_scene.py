@@ -20,6 +20,7 @@ IMAGE_TYPES = (
     "disparity_normalized_camera",
     "surface_normals",
 )
+DEPTH = ("depth_planar_camera", "depth_camera")
 # Written by hand from the documented topic list, for sim_config/scene_drone_sensors.jsonc.
 EXPECTED_PUBLISHED = {
     f"{ROBOT}/actual_pose": "geometry_msgs/PoseStamped",
@@ -29,6 +30,14 @@ EXPECTED_PUBLISHED = {
     f"{ROBOT}/Chase/scene_camera/camera_info": "sensor_msgs/CameraInfo",
     **{f"{ROBOT}/DownCamera/{kind}/image": "sensor_msgs/Image" for kind in IMAGE_TYPES},
     **{f"{ROBOT}/DownCamera/{kind}/camera_info": "sensor_msgs/CameraInfo" for kind in IMAGE_TYPES},
+    # image_transport's sibling topics: compressedDepth for the depth types, compressed for the others
+    f"{ROBOT}/Chase/scene_camera/image/compressed": "sensor_msgs/CompressedImage",
+    **{
+        f"{ROBOT}/DownCamera/{kind}/image/{'compressedDepth' if kind in DEPTH else 'compressed'}": (
+            "sensor_msgs/CompressedImage"
+        )
+        for kind in IMAGE_TYPES
+    },
     f"{ROBOT}/lidar1/lidar": "sensor_msgs/PointCloud2",
     f"{ROBOT}/radar1/radar_detections": "radar_msgs/RadarScan",
     f"{ROBOT}/radar1/radar_tracks": "radar_msgs/RadarTracks",
@@ -135,7 +144,7 @@ def test_each_image_type_has_its_size_encoding_and_frame(rig: Stack, kind: str):
     assert image.encoding == ("32FC1" if depth else "bgr8")
     assert image.step == image.width * 4 if depth else image.width * 3
     assert len(image.data) == image.step * image.height
-    assert image.header.frame_id == f"airsim_node/Drone1/DownCamera/{kind}_optical"  # REP 103 (#19)
+    assert image.header.frame_id == f"airsim_node/Drone1/DownCamera/{kind}_optical"  # REP 103
     assert info.header.frame_id == image.header.frame_id
     assert (info.width, info.height) == (320, 240)
     f = 160.0  # (320 / 2) / tan(90 deg / 2)

@@ -17,7 +17,7 @@ from airsim_mapper.convert.pose import (
     camera_pose,
     camera_pose_key,
     camera_pose_override,
-    pose_stamped,
+    robot_pose,
     sensor_pose,
 )
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rpy_from_quat
@@ -45,7 +45,7 @@ def wxyz(msg: PoseStamped) -> list[float]:
 
 
 def test_ned_pose_passes_through_with_header(ned, roundtrip):
-    msg = pose_stamped(sim_pose(q=(H, 0.0, 0.0, H)), ned)
+    msg = robot_pose(sim_pose(q=(H, 0.0, 0.0, H)), ned)
     assert xyz(msg) == [1.0, 2.0, -3.0]
     assert wxyz(msg) == [H, 0.0, 0.0, H]
     assert msg.header.frame_id == "map"
@@ -54,32 +54,32 @@ def test_ned_pose_passes_through_with_header(ned, roundtrip):
 
 
 def test_enu_pose_swaps_axes_and_turns_north_facing_into_yaw_90(enu):
-    msg = pose_stamped(sim_pose(), enu)
+    msg = robot_pose(sim_pose(), enu)
     assert xyz(msg) == [2.0, 1.0, 3.0]
     assert rpy_from_quat(np.array(wxyz(msg)))[2] == pytest.approx(math.pi / 2)
 
 
 def test_ros_stamp_comes_from_now():
     ctx = ConvertContext(stamp="ros", now=lambda: rospy.Time(7, 0))
-    assert pose_stamped(sim_pose(), ctx).header.stamp == rospy.Time(7, 0)
+    assert robot_pose(sim_pose(), ctx).header.stamp == rospy.Time(7, 0)
 
 
 def test_pose_without_orientation_is_rejected(ned):
     msg = sim_pose()
     del msg["orientation"]
     with pytest.raises(ConversionError, match=r"pose: message has no 'orientation'"):
-        pose_stamped(msg, ned)
+        robot_pose(msg, ned)
 
 
 def test_pose_with_nan_position_is_rejected(ned):
     msg = sim_pose(position=(float("nan"), 0.0, 0.0))
     with pytest.raises(ConversionError, match=r"pose: position.x must be finite, got nan"):
-        pose_stamped(msg, ned)
+        robot_pose(msg, ned)
 
 
 def test_pose_with_zero_quaternion_is_rejected(ned):
     with pytest.raises(ConversionError, match=r"pose: orientation is a zero quaternion"):
-        pose_stamped(sim_pose(q=(0.0, 0.0, 0.0, 0.0)), ned)
+        robot_pose(sim_pose(q=(0.0, 0.0, 0.0, 0.0)), ned)
 
 
 def camera_ctx(convention="ned", origin=None, mounts=None):

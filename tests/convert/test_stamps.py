@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.convert.stamps import MAX_STAMP_NS, convert_stamp, header
+from airsim_mapper.convert.stamps import MAX_STAMP_NS, convert_stamp, sim_header
 
 
 def test_stamp_splits_into_seconds_and_nanoseconds():
@@ -48,26 +48,26 @@ def test_stamps_outside_ros1_time_are_rejected(bad):
 
 
 def test_header_takes_frame_and_sim_stamp_from_the_context():
-    result = header({"time_stamp": 3_000_000_007}, ConvertContext(frame_id="map"))
+    result = sim_header({"time_stamp": 3_000_000_007}, ConvertContext(frame_id="map"))
     assert result.frame_id == "map"
     assert result.stamp == rospy.Time(3, 7)
 
 
 def test_header_with_ros_stamp_uses_now_and_ignores_the_sim_stamp():
     ctx = ConvertContext(stamp="ros", now=lambda: rospy.Time(42, 1))
-    assert header({}, ctx).stamp == rospy.Time(42, 1)
+    assert sim_header({}, ctx).stamp == rospy.Time(42, 1)
 
 
 def test_header_without_a_time_stamp_is_rejected():
     with pytest.raises(ConversionError, match=r"message has no 'time_stamp'"):
-        header({}, ConvertContext())
+        sim_header({}, ConvertContext())
 
 
 def test_header_of_a_non_map_is_rejected():
     with pytest.raises(ConversionError, match=r"message must be a map, got list"):
-        header([], ConvertContext())
+        sim_header([], ConvertContext())
 
 
 def test_a_ros_stamp_without_a_clock_is_a_conversion_error():
     with pytest.raises(ConversionError, match="stamp 'ros' needs the node's clock"):
-        header({"time_stamp": 7}, ConvertContext(stamp="ros"))
+        sim_header({"time_stamp": 7}, ConvertContext(stamp="ros"))

@@ -201,7 +201,7 @@ def test_a_bridge_ros_refuses_at_run_time_is_an_error_in_the_reload_answer_and_o
     why = "ValueError: /elsewhere/pose is already advertised with another type"
     assert outcome.applied and not outcome.ok
     assert outcome.errors == (f"bridge extra_pose[Drone1] could not start: {why}",)
-    assert outcome.message == f"applied: 1 added, 0 removed, 0 changed, 73 unchanged\n{outcome.errors[0]}"
+    assert outcome.message == f"applied: 1 added, 0 removed, 0 changed, 81 unchanged\n{outcome.errors[0]}"
     assert rig.engine.refused_bridges() == {"extra_pose[Drone1]": why}
     assert rig.engine.mapping_report["state"] == "partial"  # applied, with a bridge that did not start
     status = mapping_status(rig.engine.mapping_report, "node: ")

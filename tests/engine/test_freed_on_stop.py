@@ -1,6 +1,6 @@
 """What a live mapping edit stops is freed by reference counting, with no garbage collection: the node
-freezes its heap (engine/process_tuning.py), and a reference cycle in there is never collected (about 38 kB an
-edit before these were broken, docs/reliability.md)."""
+freezes its heap (engine/process_tuning.py), and a reference cycle in there is never collected (docs/reliability.md,
+"A reload's memory")."""
 
 from __future__ import annotations
 

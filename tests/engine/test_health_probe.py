@@ -11,7 +11,7 @@ import pytest
 from projectairsim import ProjectAirSimClient
 
 from airsim_mapper.engine.health import PROBE_METHOD, answered_within
-from airsim_mapper.simserver.protocol import decode_request, encode_result
+from airsim_mapper.simserver.wire.protocol import decode_request, encode_result
 
 
 def client_of(address: str) -> ProjectAirSimClient:

@@ -24,7 +24,7 @@ from airsim_mapper.engine.receive import (
     unpack_message,
 )
 from airsim_mapper.engine.sim_link import SimLink
-from airsim_mapper.simserver.protocol import encode_frame
+from airsim_mapper.simserver.wire.protocol import encode_frame
 
 
 def test_a_received_frame_is_a_view_whose_slices_outlive_it(tmp_path):

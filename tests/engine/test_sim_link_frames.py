@@ -9,7 +9,7 @@ import msgpack
 import pynng
 
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
-from airsim_mapper.simserver.protocol import encode_frame
+from airsim_mapper.simserver.wire.protocol import encode_frame
 
 TOPIC = "/Sim/S/robots/D/actual_pose"
 

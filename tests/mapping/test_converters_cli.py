@@ -14,7 +14,7 @@ from airsim_mapper.convert.catalog import (
     SERVE,
     SIM_TO_ROS,
     ConverterInfo,
-    markdown_table,
+    converters_markdown,
 )
 
 BEGIN, END = "<!-- converters:begin -->", "<!-- converters:end -->"
@@ -32,7 +32,7 @@ def documented_table() -> str:
 
 
 def test_the_documented_converter_table_equals_the_catalogue():
-    assert documented_table() == markdown_table(), (
+    assert documented_table() == converters_markdown(), (
         "docs/converters.md is out of date: `python -m tools.catalogue` regenerates the lines between "
         f"{BEGIN} and {END} (the output of `airsim-mapper converters`)"
     )
@@ -40,11 +40,11 @@ def test_the_documented_converter_table_equals_the_catalogue():
 
 def test_converters_prints_the_table_and_exits_0(capsys):
     assert main(["converters"]) == 0
-    assert capsys.readouterr().out == markdown_table()
+    assert capsys.readouterr().out == converters_markdown()
 
 
 def test_the_table_has_one_row_per_converter_in_catalogue_order():
-    lines = markdown_table().splitlines()
+    lines = converters_markdown().splitlines()
     assert lines[0] == "| converter | direction | ROS types | runs on | what it does |"
     assert lines[1] == "|---|---|---|---|---|"
     names = [re.match(r"\| `([a-z_]+)` \|", line).group(1) for line in lines[2:]]
@@ -56,7 +56,7 @@ def test_a_row_names_the_direction_every_ros_type_the_thread_and_escapes_bars_in
     two_types = ConverterInfo("x", ROS_TO_SIM, services, SERVE, "m", "f", "a | b")
     one_type = ConverterInfo("y", SIM_TO_ROS, ("sensor_msgs/Image",), PUBLISH, "m", "f", "s")
     light = ConverterInfo("z", SIM_TO_ROS, ("sensor_msgs/Imu",), PUBLISH, "m", "f", "t", inline=True)
-    rows = markdown_table([two_types, one_type, light]).splitlines()[2:]
+    rows = converters_markdown([two_types, one_type, light]).splitlines()[2:]
     assert rows == [
         "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | rospy's callback | a \\| b |",
         "| `y` | sim → ROS | `sensor_msgs/Image` | its topic's worker | s |",

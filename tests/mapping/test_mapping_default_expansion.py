@@ -52,6 +52,15 @@ def _instruments(robot: str) -> list[str]:
     ]
 
 
+DEPTH_TYPES = ("depth_planar_camera", "depth_camera")  # float images: compressedDepth, not compressed
+
+
+def _transport(image_topic: str) -> str:
+    """image_transport's sibling topic of an image: compressedDepth for depth images, else compressed."""
+    image_type = image_topic.rsplit("/", 2)[-2]
+    return f"{image_topic}/{'compressedDepth' if image_type in DEPTH_TYPES else 'compressed'}"
+
+
 # the example scene_drone_sensors.jsonc, written out in full from the documented topic list.
 DRONE_SENSORS_TOPICS = [
     LOAD_SCENE,
@@ -78,6 +87,14 @@ DRONE_SENSORS_TOPICS = [
     "/airsim_node/Drone1/DownCamera/depth_vis_camera/camera_info",
     "/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info",
     "/airsim_node/Drone1/DownCamera/surface_normals/camera_info",
+    "/airsim_node/Drone1/Chase/scene_camera/image/compressed",
+    "/airsim_node/Drone1/DownCamera/scene_camera/image/compressed",
+    "/airsim_node/Drone1/DownCamera/depth_planar_camera/image/compressedDepth",
+    "/airsim_node/Drone1/DownCamera/depth_camera/image/compressedDepth",
+    "/airsim_node/Drone1/DownCamera/segmentation_camera/image/compressed",
+    "/airsim_node/Drone1/DownCamera/depth_vis_camera/image/compressed",
+    "/airsim_node/Drone1/DownCamera/disparity_normalized_camera/image/compressed",
+    "/airsim_node/Drone1/DownCamera/surface_normals/image/compressed",
     "/airsim_node/Drone1/lidar1/lidar",
     *_robot_extras("Drone1"),
     *_instruments("Drone1"),
@@ -102,6 +119,9 @@ def _basic_drone(robot: str) -> list[str]:
         f"/airsim_node/{robot}/Chase/scene_camera/camera_info",
         f"/airsim_node/{robot}/DownCamera/scene_camera/camera_info",
         f"/airsim_node/{robot}/DownCamera/depth_camera/camera_info",
+        f"/airsim_node/{robot}/Chase/scene_camera/image/compressed",
+        f"/airsim_node/{robot}/DownCamera/scene_camera/image/compressed",
+        f"/airsim_node/{robot}/DownCamera/depth_camera/image/compressedDepth",
         f"/airsim_node/{robot}/IMU1/imu",
         *_robot_extras(robot),
     ]
@@ -114,11 +134,13 @@ def _robot(robot: str) -> list[str]:
 
 
 def _camera(robot: str, camera: str, *image_types: str) -> list[str]:
-    """A camera's pose topics, and an image and a camera_info topic per capture-enabled image type."""
+    """A camera's pose topics, and an image, a camera_info and image_transport's sibling topic per
+    capture-enabled image type."""
     base = f"/airsim_node/{robot}/{camera}"
     per_type = [
         f"{base}/{image_type}/{leaf}" for image_type in image_types for leaf in ("image", "camera_info")
     ]
+    per_type += [_transport(f"{base}/{image_type}/image") for image_type in image_types]
     return [f"{base}/desired_pose", f"{base}/camera_pose", *per_type]
 
 
@@ -276,7 +298,7 @@ def test_default_mapping_gives_the_documented_types_frames_and_tf_for_drone_sens
     )
     normals = by_ros["/airsim_node/Drone1/DownCamera/surface_normals/image"]
     assert normals.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/surface_normals_camera"
-    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals_optical"  # REP 103 (#19)
+    assert normals.frame_id == "airsim_node/Drone1/DownCamera/surface_normals_optical"  # REP 103
     info = by_ros["/airsim_node/Drone1/DownCamera/disparity_normalized_camera/camera_info"]
     assert info.sim == "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/disparity_normalized_camera"
     lidar = by_ros["/airsim_node/Drone1/lidar1/lidar"]

@@ -39,7 +39,7 @@ def test_validate_mapping_old_new_prints_the_difference_over_a_scene(tmp_path, c
     assert "- camera_image[Drone1/Chase/scene_camera]  /airsim_node/Drone1/Chase/scene_camera/image" in lines
     assert "- clock[SceneDroneSensors]  /clock" in lines
     assert "~ imu[Drone1/IMU1]  rate_limit_hz: None -> 5.0" in lines
-    assert lines[-1] == "0 added, 2 removed, 1 changed, 70 unchanged"
+    assert lines[-1] == "0 added, 2 removed, 1 changed, 78 unchanged"
 
 
 def test_validate_mapping_old_new_needs_a_scene_and_reports_an_invalid_new_mapping(tmp_path, capsys):

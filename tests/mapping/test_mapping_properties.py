@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.loader import load_mapping_text
-from airsim_mapper.mapping.model import Mapping
+from airsim_mapper.mapping.model import MappingDoc
 from airsim_mapper.scene import Scene, SceneConfigError, read_scene
 
 WORDS = [
@@ -76,7 +76,7 @@ def check_mapping(text: str) -> None:
     except MappingError as err:
         assert all(line.startswith("p.yaml:") for line in str(err).splitlines())
     else:
-        assert isinstance(result, Mapping)
+        assert isinstance(result, MappingDoc)
 
 
 @settings(max_examples=150, deadline=None)

@@ -1,7 +1,7 @@
 """A tiny misbehaving simulator for tests: Pair0 + Rep0 sockets that serve one scene, then feed each
 subscribed topic a cycle of frames, good and malformed, at a fixed rate.
 
-It speaks the wire protocol through the project's own codec (airsim_mapper.simserver.protocol); only the
+It speaks the wire protocol through the project's own codec (airsim_mapper.simserver.wire.protocol); only the
 content of the frames is wrong, never the real server.
 """
 
@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import msgpack
 import pynng
 
-from airsim_mapper.simserver.protocol import (
+from airsim_mapper.simserver.wire.protocol import (
     FrameType,
     decode_frame,
     decode_request,

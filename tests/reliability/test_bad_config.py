@@ -83,7 +83,7 @@ def config_dir(tmp_path: Path) -> Path:
     )
     scene["actors"] = "not a list"
     (root / "schema_violation.jsonc").write_text(json.dumps(scene))
-    os.mkfifo(root / "fifo.jsonc")  # a FIFO with no writer: opening it for reading used to block for good
+    os.mkfifo(root / "fifo.jsonc")  # a FIFO with no writer: opening it for reading would block for good
     os.mkfifo(root / "robot_fifo.jsonc")
     text = (root / SCENE).read_text()
     (root / "fifo_robot.jsonc").write_text(text.replace("robot_quadrotor_sensors.jsonc", "robot_fifo.jsonc"))

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from harness import Rig, RosMaster, wait_until
 
-from airsim_mapper.simserver.protocol import encode_frame
+from airsim_mapper.simserver.wire.protocol import encode_frame
 from reliability.fake_server import FakeSimServer, message_frame
 from reliability.relkit import SimPorts, probe, stamps, start_node, statuses
 

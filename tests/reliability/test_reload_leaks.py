@@ -1,6 +1,6 @@
 """Live mapping reloads leak nothing: 200 edits, each restarting 9 topics, leave open files, threads and
 memory where they were after the first 20. The node's heap is frozen, so a stopped bridge must be freed by
-reference counting (tests/engine/test_freed_on_stop.py); its cycles used to stay, about 38 kB an edit.
+reference counting (tests/engine/test_freed_on_stop.py): a reference cycle would keep it for good.
 Scene reloads, each replacing every bridge of the scene, level off the same way."""
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ def test_two_hundred_mapping_reloads_leak_no_files_threads_or_memory(
     assert "restarted" in node.output() or "changed" in node.output()
     assert files1 - files0 <= 2, "open files grew with the reloads"
     assert threads1 - threads0 <= 2, "threads grew with the reloads"
-    # 6.5-7 MB when the stopped bridges stayed in the frozen heap; allocator noise is far below the bound
+    # stopped bridges kept in the frozen heap by reference cycles would pass it; allocator noise is far below
     # (docs/reliability.md, "A reload's memory")
     assert rss1 - rss0 < MEMORY_BOUND_MB, "memory grew with the reloads"
     assert "Traceback" not in node.output()

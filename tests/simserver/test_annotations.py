@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.annotations import AnnotationError, AnnotationSettings, annotate
-from airsim_mapper.simserver.camera_model import camera_info_message
-from airsim_mapper.simserver.scene_spec import SceneSpecError, parse_scene
-from airsim_mapper.simserver.world_file import world_from_dict
+from airsim_mapper.simserver.render.annotations import AnnotationError, AnnotationSettings, annotate
+from airsim_mapper.simserver.render.camera_model import camera_info_message
+from airsim_mapper.simserver.scene.config import SceneSpecError, parse_scene
+from airsim_mapper.simserver.world.world_file import world_from_dict
 
 ORIGIN, LEVEL = np.zeros(3), quat_from_rpy(0.0, 0.0, 0.0)
 W, H, FOV = 100, 50, 90.0  # f = 50 px on both axes, principal point (50, 25)

@@ -9,17 +9,17 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rotate
-from airsim_mapper.simserver import gl_renderer, rendering
-from airsim_mapper.simserver.camera_model import (
+from airsim_mapper.simserver.render import gl_renderer, rendering
+from airsim_mapper.simserver.render.camera_model import (
     CameraError,
     RenderRequest,
     camera_info_message,
     segmentation_color,
     segmentation_palette,
 )
-from airsim_mapper.simserver.rendering import render
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.render.rendering import render
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world
 
 LEVEL_NORTH = quat_from_rpy(0.0, 0.0, 0.0)
 # the robot configs with a DownCamera capturing all seven image types
@@ -209,19 +209,19 @@ class PublishedImages:
         return True
 
     def publish(self, path: str, frame) -> None:
-        from airsim_mapper.simserver import protocol
+        from airsim_mapper.simserver.wire import protocol
 
         self.messages[path] = protocol.decode_body(frame.body)
 
 
 def test_a_camera_stream_renders_depth_vis_with_its_capture_max_depth_meters(world):
-    from airsim_mapper.simserver.camera_stream import CameraStream
-    from airsim_mapper.simserver.motion import Body
-    from airsim_mapper.simserver.scene_spec import CaptureSetting, SensorSpec
+    from airsim_mapper.simserver.motion.motion import Body
+    from airsim_mapper.simserver.scene.config import CaptureSpec, SensorSpec
+    from airsim_mapper.simserver.sensors.camera_stream import CameraStream
 
     captures = (
-        CaptureSetting(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),
-        CaptureSetting(2, 64, 48, 90.0, True, False, compress=False),
+        CaptureSpec(4, 64, 48, 90.0, True, False, max_depth_m=5.0, compress=False),
+        CaptureSpec(2, 64, 48, 90.0, True, False, compress=False),
     )
     sensor = SensorSpec("C", "camera", {}, captures=captures, capture_interval=0.1)
     body = Body(np.array([0.0, 0.0, -20.0]), quat_from_rpy(0.0, -math.pi / 2, 0.0), lambda p: 0.0)

@@ -12,7 +12,7 @@ from projectairsim import Drone, World
 from projectairsim.types import ImageType, Pose
 from projectairsim.utils import unpack_image
 
-from airsim_mapper.simserver.camera_model import segmentation_color
+from airsim_mapper.simserver.render.camera_model import segmentation_color
 from simserver.clientkit import scene_config, settle, subscribe
 
 BALL_SEGMENTATION_ID = 11  # OrangeBall of the built-in world, at (20, 20, -3) with radius 1

@@ -1,5 +1,5 @@
 """Lock-step stepping with the real client: with the scene paused, every step publishes each camera image
-and lidar scan its time calls for, before the step's reply (1 single step in 8 used to lose a frame)."""
+and lidar scan its time calls for, before the step's reply, so that no single step loses a frame."""
 
 from __future__ import annotations
 

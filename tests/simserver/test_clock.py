@@ -6,8 +6,8 @@ import time
 
 import pytest
 
-from airsim_mapper.simserver.services import ServiceError
-from airsim_mapper.simserver.sim_clock import SimClock
+from airsim_mapper.simserver.scene.sim_clock import SimClock
+from airsim_mapper.simserver.wire.services import ServiceError
 
 
 def test_a_steppable_clock_starts_near_zero_and_advances_with_wall_time():

@@ -7,8 +7,8 @@ import json
 
 import pytest
 
-from airsim_mapper.simserver.env_actors import EnvActors
-from airsim_mapper.simserver.scene_spec import SceneSpecError, parse_scene
+from airsim_mapper.simserver.scene.config import SceneSpecError, parse_scene
+from airsim_mapper.simserver.scene.env_actors import EnvActors
 from airsim_mapper.simserver.session import TrajectoryStore
 
 SCRIPT = {

@@ -24,10 +24,10 @@ import numpy as np
 import pytest
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
-from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer, rendering
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world, world_from_dict
+from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer, rendering
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world, world_from_dict
 
 EDGE_FRACTION = 0.005  # of an image's pixels: edges may disagree, nothing else
 FAR_M = 200.0  # beyond this the horizon's grazing rays amplify float32 rounding; only the fraction applies

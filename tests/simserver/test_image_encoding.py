@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from airsim_mapper.simserver.image_encoding import unsupported_combination, wire_image
+from airsim_mapper.simserver.render.image_encoding import unsupported_combination, wire_image
 
 W, H = 4, 3
 BGR = np.arange(W * H * 3, dtype=np.uint8).tobytes()

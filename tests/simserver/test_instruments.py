@@ -9,7 +9,7 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.instrument_models import (
+from airsim_mapper.simserver.sensors.instrument_models import (
     GRAVITY,
     MAGNETIC_FIELD_NED,
     InstrumentError,
@@ -22,7 +22,7 @@ from airsim_mapper.simserver.instrument_models import (
     imu_message,
     magnetometer_message,
 )
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.world.world_file import load_world
 
 HOME = (47.641468, -122.140165, 122.0)  # the scenes' home-geo-point
 # robot configs carrying every instrument
@@ -227,10 +227,10 @@ class RecordingHub:
 def test_a_robots_instruments_publish_every_tick_from_one_snapshot_of_the_body(monkeypatch):
     from types import SimpleNamespace
 
-    from airsim_mapper.simserver.motion import Body
-    from airsim_mapper.simserver.robots import RobotRuntime
-    from airsim_mapper.simserver.scene_spec import SensorSpec
-    from airsim_mapper.simserver.sensor_streams import InstrumentStream
+    from airsim_mapper.simserver.motion.motion import Body
+    from airsim_mapper.simserver.robot.robots import RobotRuntime
+    from airsim_mapper.simserver.scene.config import SensorSpec
+    from airsim_mapper.simserver.sensors.sensor_streams import InstrumentStream
 
     body = Body(np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, 0.0, 0.0), lambda _p: 0.0)
     snapshots = []
@@ -266,7 +266,7 @@ def test_a_robots_instruments_publish_every_tick_from_one_snapshot_of_the_body(m
 
 
 def test_the_report_timer_keeps_the_real_sensors_rate_on_average():
-    from airsim_mapper.simserver.sensor_streams import ReportTimer
+    from airsim_mapper.simserver.sensors.sensor_streams import ReportTimer
 
     every = ReportTimer(None)
     assert [every.due(t) for t in (0, 3, 3, 6)] == [True, True, False, True]

@@ -9,10 +9,10 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
-from airsim_mapper.simserver.lidar_model import LidarError, LidarModel
-from airsim_mapper.simserver.sensor_streams import LIDAR_MIN_SEGMENT_NS
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.sensors.lidar_model import LidarError, LidarModel
+from airsim_mapper.simserver.sensors.sensor_streams import LIDAR_MIN_SEGMENT_NS
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world
 
 LEVEL = np.array([1.0, 0.0, 0.0, 0.0])
 TENTH_S = 100_000_000
@@ -218,9 +218,9 @@ class EverythingSubscribed:
 
 
 def lidar_stream(world, config: dict, step_ns: int = 3_000_000):
-    from airsim_mapper.simserver.motion import Body
-    from airsim_mapper.simserver.scene_spec import SensorSpec
-    from airsim_mapper.simserver.sensor_streams import LidarStream
+    from airsim_mapper.simserver.motion.motion import Body
+    from airsim_mapper.simserver.scene.config import SensorSpec
+    from airsim_mapper.simserver.sensors.sensor_streams import LidarStream
 
     body = Body(np.array([0.0, 0.0, -10.0]), LEVEL, lambda _p: 0.0)
     hub = EverythingSubscribed()

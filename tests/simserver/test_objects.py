@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver import gltf
-from airsim_mapper.simserver.objects import LiveWorld, SceneObjects
-from airsim_mapper.simserver.services import ServiceError
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.scene.objects import LiveWorld, SceneObjects
+from airsim_mapper.simserver.wire.services import ServiceError
+from airsim_mapper.simserver.world import gltf
+from airsim_mapper.simserver.world.world_file import load_world
 
 
 def box_gltf(minimum, maximum, node: dict | None = None, color=(1.0, 0.0, 0.0, 1.0)) -> dict:

@@ -7,8 +7,8 @@ import time
 
 import pytest
 
-from airsim_mapper.simserver import outbox as outbox_module
-from airsim_mapper.simserver.outbox import SMALL_FRAME_BYTES, Outbox
+from airsim_mapper.simserver.wire import outbox as outbox_module
+from airsim_mapper.simserver.wire.outbox import SMALL_FRAME_BYTES, Outbox
 
 BIG = b"x" * SMALL_FRAME_BYTES
 

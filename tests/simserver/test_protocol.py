@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.wire import protocol
 
 
 def test_server_message_frame_packs_topic_and_body_as_msgpack_str_like_the_cpp_server():

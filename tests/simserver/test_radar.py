@@ -9,9 +9,9 @@ import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.radar_model import RadarError, RadarModel
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.sensors.radar_model import RadarError, RadarModel
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world
 
 FACING_EAST = quat_from_rpy(0.0, 0.0, math.pi / 2)
 STILL = np.zeros(3)

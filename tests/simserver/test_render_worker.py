@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 from harness import wait_until
 
-from airsim_mapper.simserver import camera_model, raycast_renderer, render_worker, rendering
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.render_worker import (
+from airsim_mapper.simserver.render import camera_model, raycast_renderer, render_worker, rendering
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.render.render_worker import (
     RENDER_NICE,
     RenderWorker,
     RenderWorkerError,
     set_autogroup_nice,
 )
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.world.world_file import load_world
 from simserver.clientkit import load_world as load_scene
 
 pytestmark = pytest.mark.live  # the render worker is a child process
@@ -157,7 +157,10 @@ def test_the_server_renders_in_a_nicer_child_unless_told_to_render_in_process(la
                 group = Path(f"/proc/{kids[0]}/autogroup").read_text().split()
                 assert group[0] != Path(f"/proc/{server.process.popen.pid}/autogroup").read_text().split()[0]
                 assert group[1:] == ["nice", str(nice)]
-            assert b"airsim_mapper.simserver.render_worker" in Path(f"/proc/{kids[0]}/cmdline").read_bytes()
+            assert (
+                b"airsim_mapper.simserver.render.render_worker"
+                in Path(f"/proc/{kids[0]}/cmdline").read_bytes()
+            )
     finally:
         client.disconnect()
     if not in_process:  # SIGTERM to the server: it stops, and its renderer exits on end of file

@@ -9,15 +9,9 @@ import pytest
 from harness import SIM_CONFIG
 from simconfigs import EXAMPLE_SCENES, scenes_of
 
-from airsim_mapper.simserver.scene_spec import (
-    SceneSpecError,
-    default_scene,
-    geo_to_ned,
-    info_topic_path,
-    ned_to_geo,
-    parse_scene,
-    topic_table,
-)
+from airsim_mapper.simserver.scene.config import SceneSpecError, default_scene, parse_scene
+from airsim_mapper.simserver.scene.geo import geo_to_ned, ned_to_geo
+from airsim_mapper.simserver.scene.topic_table import info_topic_path, topic_table
 from simserver.clientkit import scene_config
 from simserver.expected_topics import EXAMPLE_EXPECTED, EXPECTED, PROJECT_EXPECTED
 

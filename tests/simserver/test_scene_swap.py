@@ -10,8 +10,8 @@ from collections.abc import Iterator
 import pytest
 from harness import free_port
 
-from airsim_mapper.simserver import protocol
 from airsim_mapper.simserver.server import ServerOptions, SimServer
+from airsim_mapper.simserver.wire import protocol
 
 POSE = "/Sim/SceneBasicDrone/robots/Drone1/actual_pose"  # the default scene's, and the reloaded one's
 SAME_ID = {

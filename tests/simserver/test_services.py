@@ -5,8 +5,8 @@ from __future__ import annotations
 import msgpack
 import pytest
 
-from airsim_mapper.simserver import protocol
-from airsim_mapper.simserver.services import MethodTable, ServiceError, dispatch
+from airsim_mapper.simserver.wire import protocol
+from airsim_mapper.simserver.wire.services import MethodTable, ServiceError, dispatch
 
 
 def request(method: str, params: dict, request_id: int = 5) -> bytes:
@@ -90,7 +90,7 @@ def test_replace_group_swaps_scene_methods_atomically(table):
 
 
 def protocol_method(name: str):
-    from airsim_mapper.simserver.services import Method
+    from airsim_mapper.simserver.wire.services import Method
 
     return Method(name, (), lambda p: True)
 

@@ -9,8 +9,8 @@ import pynng
 import pytest
 from harness import free_port
 
-from airsim_mapper.simserver import protocol
-from airsim_mapper.simserver.topics import TopicHub, TopicInfo
+from airsim_mapper.simserver.wire import protocol
+from airsim_mapper.simserver.wire.topics import TopicHub, TopicInfo
 
 PATH = "/Sim/S/robots/R/sensors/Airspeed/airspeed"
 

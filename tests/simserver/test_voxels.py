@@ -9,9 +9,9 @@ import pytest
 from projectairsim.planners import AStarPlanner
 from projectairsim.utils import get_voxel_grid_idx
 
-from airsim_mapper.simserver import voxels
-from airsim_mapper.simserver.world import World
-from airsim_mapper.simserver.world_file import load_world, world_from_dict
+from airsim_mapper.simserver.scene import voxels
+from airsim_mapper.simserver.world.world import World
+from airsim_mapper.simserver.world.world_file import load_world, world_from_dict
 
 
 def grid(world: World, center=(0.0, 0.0, 0.0), size=20, res=1.0, ignore=()) -> list[bool]:

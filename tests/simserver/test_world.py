@@ -8,8 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from airsim_mapper.simserver.world import GROUND_INDEX, MISS_INDEX, World, WorldObject
-from airsim_mapper.simserver.world_file import DEFAULT_WORLD_PATH, WorldError, load_world, world_from_dict
+from airsim_mapper.simserver.world import world as world_module
+from airsim_mapper.simserver.world.world import GROUND_INDEX, MISS_INDEX, World, WorldObject
+from airsim_mapper.simserver.world.world_file import (
+    DEFAULT_WORLD_PATH,
+    WorldError,
+    load_world,
+    world_from_dict,
+)
 
 
 @pytest.fixture(scope="module")
@@ -220,7 +226,7 @@ def test_range_along_matches_a_one_ray_cast_in_every_direction():
 
 def test_collision_checks_far_from_every_object_skip_the_exact_test(world, monkeypatch):
     calls = []
-    monkeypatch.setattr(World, "_box_contacts", lambda *a: calls.append(a))
+    monkeypatch.setattr(world_module, "box_contacts", lambda *a: calls.append(a))
     assert world.collide_sphere(np.array([-50.0, -50.0, -10.0]), 0.5) is None
     assert calls == []
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from harness import ROOT
 
-from tools.screenshot import screenshot
+from tools.screenshot import images, rviz_config, watch
 
 RADAR_FRAME = "airsim_node/Drone1/radar1"
 
@@ -26,7 +26,7 @@ def test_xwd_pixels_are_decoded_with_the_files_masks(tmp_path):
     body[:, :3] = words
     path = tmp_path / "screen.xwd"
     path.write_bytes(np.array(head, ">u4").tobytes() + b"name" + body.tobytes())
-    assert (screenshot.read_xwd(path) == rgb).all()
+    assert (images.read_xwd(path) == rgb).all()
 
 
 # -- end to end on the real stack -------------------------------------------------------------------------
@@ -69,11 +69,11 @@ def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_pa
 
     # RViz ran and subscribed (per the master) to every topic of its config, and to tf
     assert report["rviz_alive"] is True
-    wanted = set(screenshot.config_topics()) | {"/tf", "/tf_static"}
+    wanted = set(rviz_config.config_topics()) | {"/tf", "/tf_static"}
     assert wanted <= set(report["rviz_subscriptions"])
     # real data flowed: camera images, lidar clouds, and radar markers from the marker node
-    assert report["messages"][screenshot.IMAGE_TOPIC] >= 3
-    assert report["messages"][screenshot.LIDAR_TOPIC] >= 3
+    assert report["messages"][watch.IMAGE_TOPIC] >= 3
+    assert report["messages"][watch.LIDAR_TOPIC] >= 3
     assert report["marker_publishers"] == ["/radar_markers"]
     assert report["radar_marker_points"] > 0
     assert report["radar_marker_frame"] == RADAR_FRAME
@@ -85,7 +85,7 @@ def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_pa
     assert pixels.std() > 20
     colours = np.unique(pixels.reshape(-1, 3), axis=0)
     assert len(colours) > 300
-    background = screenshot.background_share(pixels, screenshot.config_background())  # the 3D view drawn
+    background = images.background_share(pixels, rviz_config.config_background())  # the 3D view drawn
     assert 0.05 < background < 0.9
 
     # everything it started is gone: the display, the master and the simulator's ports
@@ -98,12 +98,12 @@ def test_screenshot_pipeline_shows_live_data_in_rviz_and_stops_everything(tmp_pa
 
 
 def test_the_capture_knows_the_3d_view_is_drawn_by_the_configs_background_colour():
-    colour = screenshot.config_background()
+    colour = rviz_config.config_background()
     assert colour == (40, 40, 48)  # rviz/airsim_mapper.rviz's Global Options
     black = np.zeros((4, 6, 3), np.uint8)  # RViz's 3D view before llvmpipe's first frame
-    assert screenshot.background_share(black, colour) == 0.0
+    assert images.background_share(black, colour) == 0.0
     black[:2] = colour
-    assert screenshot.background_share(black, colour) == 0.5
+    assert images.background_share(black, colour) == 0.5
 
 
 def test_a_crash_of_rviz_itself_is_told_from_other_early_exits():
@@ -126,7 +126,8 @@ def test_a_crash_of_rviz_itself_is_told_from_other_early_exits():
 def test_an_rviz_crash_is_found_in_the_whole_log_even_when_later_output_pushed_it_out_of_the_message(
     tmp_path,
 ):
-    from tools.screenshot.screenshot import ChildExited, ScreenshotError, crashed_rviz
+    from tools.screenshot.errors import ChildExited, ScreenshotError
+    from tools.screenshot.screenshot import crashed_rviz
 
     log = tmp_path / "roslaunch.log"
     crash = "REQUIRED process [rviz-4] has died!\nprocess has died [pid 21007, exit code -6, cmd rviz]\n"

@@ -16,19 +16,10 @@ import time
 import pytest
 from harness import ROOT
 
+from tools.soak.gaps import explain_gaps, own_delays
 from tools.soak.hosttune import softirq_threads
-from tools.soak.soak import (
-    WAKE_LATE_S,
-    Events,
-    Sample,
-    explain_gaps,
-    judge_poses,
-    own_delays,
-    read_probe,
-    read_wakes,
-    report,
-    since,
-)
+from tools.soak.probes import WAKE_LATE_S, read_probe, read_wakes, since
+from tools.soak.verdict import Events, Sample, judge_poses, report
 
 SOAK = [sys.executable, "-m", "tools.soak"]
 

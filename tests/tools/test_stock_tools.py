@@ -165,7 +165,7 @@ def test_a_bag_of_many_topics_starts_every_topic_at_once(launcher: Rig) -> None:
     start = min(t for topic, t in first.items() if not topic.startswith(CAMERA))  # lazy: it starts later
     late = {t: round(first[t] - start, 3) for t in topics if first[t] - start > 0.8 and CAMERA not in t}
     assert not late, f"topics whose first message came late (s): {late}"
-    # the camera's image and camera_info start together (their connections used to start 1 s apart); a
+    # the camera's image and camera_info start together (neither connection waits for the other); a
     # busy host may drop one of either later (queue_size 1), so only the start is compared
     images, infos = set(stamps[f"{CAMERA}/image"]), set(stamps[f"{CAMERA}/camera_info"])
     assert len(images & infos) > 10

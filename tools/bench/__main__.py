@@ -15,10 +15,11 @@ from pathlib import Path
 from typing import Any
 
 from tools import camera_probe
-from tools.bench import costs, renderers, report, sampling, scenes
+from tools.bench import costs, host, renderers, sampling, scenes, tables, targets, transports
 from tools.bench.e2e import Bench, rotated
+from tools.bench.results import latency_rounds, quiet_round
 
-CAMERA_HZ, LIDAR_HZ, POSE_HZ, SCALE_CAMERA_HZ = 30.0, scenes.LIDAR_HZ, 100.0, 10.0
+CAMERA_HZ, LIDAR_HZ, SCALE_CAMERA_HZ = targets.CAMERA_HZ, scenes.LIDAR_HZ, targets.SCALE_CAMERA_HZ
 SCALE_DRONES = (1, 2, 5, 10)
 LATENCY_ROUNDS = 3  # the pose p99 targets are judged on the median of this many interleaved rounds
 
@@ -35,8 +36,8 @@ def more_rounds(
 ) -> list[dict[str, Any]]:
     """`rounds` - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
     the receive loop alone), in an order rotated by one each round so that a slow spell of the host falls
-    on each of them in turn. The first round is the case's main runs (`first`, as `report.latency_rounds`
-    reads them). While fewer than `rounds` rounds were quiet (`report.quiet_round`), one more is run, up to
+    on each of them in turn. The first round is the case's main runs (`first`, as `latency_rounds`
+    reads them). While fewer than `rounds` rounds were quiet (`quiet_round`), one more is run, up to
     `rounds` more in all. Without `camera` the forwarder and the receive loop subscribe no camera (the
     bridge subscribes what its probe reads)."""
 
@@ -54,11 +55,11 @@ def more_rounds(
     runs = {"bridge": bridge, "forwarder": forwarder, "receive_floor": receive_floor}
     names = list(kinds)
     more: list[dict[str, Any]] = []
-    calm = int(first is None or report.quiet_round(first))
+    calm = int(first is None or quiet_round(first))
     n = 1
     while n < rounds or (calm < rounds and n < 2 * rounds):
         more.append({name: runs[name](n + 1) for name in rotated(names, n)})
-        calm += report.quiet_round(more[-1])
+        calm += quiet_round(more[-1])
         n += 1
     return more
 
@@ -102,7 +103,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
     with bench.forwarder_session(single) as session:
         floor["pose_idle"] = session.probe("forwarder_pose_idle", pose_only)
     # pose only is two small CPU figures: its ratio is judged on the median of interleaved rounds too
-    first = report.latency_rounds(out, "pose_idle")[0]
+    first = latency_rounds(out, "pose_idle")[0]
     out["rounds"]["pose_idle"] = more_rounds(
         bench, "pose_idle", single, pose_only, ("bridge", "forwarder"), rounds, first, camera=False
     )
@@ -110,7 +111,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
         floor["camera"] = session.probe("forwarder_camera", camera_topics)
         floor["camera_apart"] = session.probe("forwarder_camera_apart", pose_only, apart=image_only)
     out["receive_floor"]["camera"] = bench.receive_floor(single, camera=True)
-    first = report.latency_rounds(out, "camera")[0]
+    first = latency_rounds(out, "camera")[0]
     out["rounds"]["camera"] = more_rounds(bench, "camera", single, camera_topics, rounds=rounds, first=first)
     with bench.bridge_session(hd) as session:
         out["bridge"]["camera_720p"] = session.probe("camera_720p", camera_topics)
@@ -123,6 +124,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
     out["pose"]["waiting"] = bench.waiting_node()  # no scene: nothing arrives, nothing is published
     with bench.bridge_session(single, profile=profile("depth")) as session:
         out["bridge"]["depth"] = session.probe("depth", [scenes.image_topic(1, "depth_planar_camera")])
+    out["transports"] = transports.run(bench, single)  # image_transport's compressed topics subscribed
     with bench.bridge_session(single, profile=profile("lidar")) as session:
         out["bridge"]["lidar"] = session.probe("lidar", [scenes.lidar_topic(1)])
     with bench.bridge_session(single, decode="client") as session:
@@ -134,7 +136,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
         floor["camera_load"] = session.probe("forwarder_pose_load", loaded)
     with bench.bridge_session(load, runner="mission", profile=profile("mission")) as session:
         out["pose"]["camera_load_mission"] = session.probe("pose_load_mission", loaded)
-    first = report.latency_rounds(out, "camera_load")[0]
+    first = latency_rounds(out, "camera_load")[0]
     out["rounds"]["camera_load"] = more_rounds(
         bench, "camera_load", load, loaded, ("bridge", "forwarder"), rounds, first
     )
@@ -148,7 +150,7 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
             with bench.forwarder_session(scene, camera=True) as session:
                 floor["scale"] = session.probe(f"forwarder_scale{drones}", topics)
             out["receive_floor"]["scale"] = bench.receive_floor(scene, camera=True)
-            first = report.latency_rounds(out, "scale")[0]
+            first = latency_rounds(out, "scale")[0]
             out["rounds"]["scale"] = more_rounds(
                 bench, f"scale{drones}", scene, topics, rounds=rounds, first=first
             )
@@ -190,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
         },
         "costs": costs.run(),
     }
-    print(report.costs_table(results["costs"]), flush=True)
+    print(tables.costs_table(results["costs"]), flush=True)
     results["renderers"] = renderers.run()
     print(renderers.table(results["renderers"]), flush=True)
     # the server's own camera path: all seven types of one 1280x720 camera, render worker to socket
@@ -208,12 +210,14 @@ def main(argv: list[str] | None = None) -> int:
         results["machine"]["windows"] = bench.windows
         results["machine"]["windows_retaken"] = bench.windows_retaken
         results["workdir"] = str(workdir)
-        print(report.e2e_table(results["e2e"]), flush=True)
-    results["targets"] = report.targets(results)
+        print(tables.e2e_table(results["e2e"]), flush=True)
+        raw = {key: results["e2e"]["bridge"][key] for key in ("camera", "depth")}
+        print(transports.table(results["e2e"]["transports"], raw), flush=True)
+    results["targets"] = targets.targets(results)
     results["seconds"] = time.monotonic() - started
     results["machine"]["load_average_at_end"] = os.getloadavg()[0]
     results["machine"]["stolen_share"] = sampling.stolen_share(host_at_start, sampling.host_sample())
-    print(report.targets_table(results["targets"]), flush=True)
+    print(tables.targets_table(results["targets"]), flush=True)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(results, indent=1, default=float))
@@ -222,16 +226,16 @@ def main(argv: list[str] | None = None) -> int:
         f"results: {out} ({results['seconds']:.0f} s); load average {machine['load_average_at_start']:.1f} "
         f"at start, {machine['load_average_at_end']:.1f} at end, on {machine['cpus']} cores"
     )
-    print(report.host_line(machine))
+    print(host.host_line(machine))
     e2e = results.get("e2e", {})
     for warning in (
-        report.floor_over_target(e2e),
-        report.forwarder_over_latency_target(e2e),
-        report.forwarder_over_cpu_target(e2e),
+        host.floor_over_target(e2e),
+        host.forwarder_over_latency_target(e2e),
+        host.forwarder_over_cpu_target(e2e),
     ):
         if warning:
             print(warning)
-    noisy = report.noisy_host(machine)
+    noisy = host.noisy_host(machine)
     if noisy:
         print(noisy)
     # Only the start counts: at the end the load average includes the bench's own processes.

@@ -23,7 +23,7 @@ import msgpack
 import numpy as np
 
 from airsim_mapper.engine.fast_frames import parse_frame_header
-from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.wire import protocol
 from tools.bench.probe import TopicRecord, summary, write_result
 
 WIDTH, HEIGHT, POINTS = 1920, 1080, 100_000

@@ -34,8 +34,9 @@ from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.fast_frames import parse_frame_header
 from airsim_mapper.engine.publish import serialized
 from airsim_mapper.engine.receive import unpack_message
-from airsim_mapper.simserver import protocol
+from airsim_mapper.simserver.wire import protocol
 from tools.bench import reference
+from tools.bench.results import BGR, DEPTH, DEPTH_FLOAT, LIDAR, RADAR
 
 FULL_HD = (1920, 1080)
 SMALL = (320, 240)  # the per-pixel reference runs here and is scaled by the pixel count
@@ -149,27 +150,19 @@ def as_genpy(msg: Any) -> Any:
 
 def cases() -> list[Case]:
     scale = (FULL_HD[0] * FULL_HD[1]) / (SMALL[0] * SMALL[1])
+    small_depth = image_frame(*SMALL, "32FC1")
+
+    def depth(name: str, encoding: str, repeat: int = Case.repeat) -> Case:
+        """A 1080p depth image; the per-pixel reference on the small one, scaled."""
+        frame = image_frame(*FULL_HD, encoding)
+        return Case(name, frame, "image", reference.depth_32fc1_to_image, small_depth, scale, repeat)
+
     return [
-        Case("image 1920x1080 BGR", image_frame(*FULL_HD, "BGR"), "image", reference.bgr_to_image),
-        Case(
-            "depth 1920x1080 (16FC1, 1.1.0 server)",
-            image_frame(*FULL_HD, "16FC1"),
-            "image",
-            reference.depth_32fc1_to_image,
-            image_frame(*SMALL, "32FC1"),
-            scale,
-        ),
-        Case(
-            "depth 1920x1080 (32FC1 data_float, git server)",
-            image_frame(*FULL_HD, "32FC1"),
-            "image",
-            reference.depth_32fc1_to_image,
-            image_frame(*SMALL, "32FC1"),
-            scale,
-            repeat=5,
-        ),
-        Case("lidar 100k points", lidar_frame(), "pointcloud", reference.lidar_to_cloud),
-        Case("radar 200 detections", radar_frame(), "radar_scan", reference.radar_to_scan, repeat=50),
+        Case(BGR, image_frame(*FULL_HD, "BGR"), "image", reference.bgr_to_image),
+        depth(DEPTH, "16FC1"),
+        depth(DEPTH_FLOAT, "32FC1", repeat=5),
+        Case(LIDAR, lidar_frame(), "pointcloud", reference.lidar_to_cloud),
+        Case(RADAR, radar_frame(), "radar_scan", reference.radar_to_scan, repeat=50),
     ]
 
 

@@ -11,8 +11,8 @@ result to --out, with its own minor page faults in the window and its malloc thr
 It keeps its read buffers in the heap as the bridge does (`tuning.keep_frame_buffers`), as
 docs/ros-usage.md tells a user's node that reads large images to: with glibc's adaptive malloc thresholds
 the probe's own page faults on each image held its pose callback back by milliseconds, through either
-bridge, and varied from run to run by more than the bench's targets leave (docs/performance.md, "The
-probe's own allocator"). `--malloc glibc` leaves glibc's thresholds, for that comparison.
+bridge, and varied from run to run by more than the bench's targets leave (docs/performance.md, "A
+subscriber's own image reading"). `--malloc glibc` leaves glibc's thresholds, for that comparison.
 
     python -m tools.bench.probe --out result.json [--warmup S] [--duration S] [--malloc glibc] TOPIC...
 """

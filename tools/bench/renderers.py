@@ -13,19 +13,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import statistics
 import time
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
-from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver import camera_model, gl_renderer, raycast_renderer
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.world.world_file import load_world
+from tools.bench import tables
+from tools.render_timing import POSES
 
 CASES = {  # name: (width, height, image types)
     "scene 1280x720": (1280, 720, (camera_model.SCENE,)),
@@ -34,13 +32,6 @@ CASES = {  # name: (width, height, image types)
 }
 TARGETS = {"scene 1280x720": 60.0, "all seven 1280x720": 30.0, "scene 1920x1080": 30.0}  # renders/s, GL
 FOV = 90.0
-# oblique over the blocks, facing a wall at 8 m, straight down at the pad, towards the ball
-POSES = (
-    (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.2, 0.6)),
-    (np.array([20.0, 0.0, -4.0]), quat_from_rpy(0.0, 0.0, 0.0)),
-    (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -math.pi / 2, 0.0)),
-    (np.array([14.0, 14.0, -3.5]), quat_from_rpy(0.0, -0.05, math.pi / 4)),
-)
 GL_RENDERS, RAYCAST_RENDERS = 40, 6  # per case; the ray caster takes 0.1-0.3 s a render
 
 
@@ -83,8 +74,6 @@ def run(gl_renders: int = GL_RENDERS, raycast_renders: int = RAYCAST_RENDERS) ->
 
 
 def table(results: dict[str, Any]) -> str:
-    from tools.bench.report import _table
-
     rows = []
     for name in CASES:
         gl, ray = results["gl"].get(name), results["raycast"][name]
@@ -108,7 +97,7 @@ def table(results: dict[str, Any]) -> str:
         "GL/raycast",
     ]
     note = f"GL: {results.get('gl_renderer') or results.get('gl_error')}; {os.cpu_count()} cores"
-    return _table([*header, "target /s"], rows) + "\n" + note
+    return tables.table([*header, "target /s"], rows) + "\n" + note
 
 
 def targets(results: dict[str, Any]) -> list[tuple[str, float | None, float]]:

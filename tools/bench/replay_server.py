@@ -20,9 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.simserver import camera_model, lidar_model, rendering
-from airsim_mapper.simserver.camera_model import RenderRequest
 from airsim_mapper.simserver.cli import main as server_main
+from airsim_mapper.simserver.render import camera_model, rendering
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.sensors import lidar_model
 
 MAX_RENDER_PIXELS = 320 * 240
 

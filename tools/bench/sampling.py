@@ -11,7 +11,7 @@ from dataclasses import dataclass
 CLOCK_TICKS = os.sysconf("SC_CLK_TCK")
 PAGE_BYTES = os.sysconf("SC_PAGE_SIZE")
 # A measurement window is quiet when a hypervisor took less than this share of the machine's CPU time
-# during it: 80 ms of the 16 s two cores give in an 8 s window. Quiet windows lose under 0.2%; past this
+# during it: 80 ms of the 16 s two cores give in an 8 s window. Quiet windows lose far less; past this
 # both the latency and the processes' own CPU time move (docs/performance.md).
 QUIET_STOLEN_SHARE = 0.005
 

@@ -23,11 +23,11 @@ from typing import Any
 
 import pynng
 
-from airsim_mapper.simserver.protocol import FrameType, encode_frame
-from airsim_mapper.simserver.scene_spec import parse_scene
+from airsim_mapper.simserver.scene.config import parse_scene
 from airsim_mapper.simserver.session import Session
-from airsim_mapper.simserver.topics import TopicHub
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.wire.protocol import FrameType, encode_frame
+from airsim_mapper.simserver.wire.topics import TopicHub
+from airsim_mapper.simserver.world.world_file import load_world
 from tools.bench import scenes
 from tools.bench.sampling import p99
 from tools.rig import free_port

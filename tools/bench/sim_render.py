@@ -17,18 +17,17 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import argparse
 import json
-import math
-import statistics
 import time
 from collections.abc import Callable
 
 import numpy as np
 
 from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.simserver.camera_model import RenderRequest
-from airsim_mapper.simserver.lidar_model import LidarModel
-from airsim_mapper.simserver.rendering import render
-from airsim_mapper.simserver.world_file import load_world
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.render.rendering import render
+from airsim_mapper.simserver.sensors.lidar_model import LidarModel
+from airsim_mapper.simserver.world.world_file import load_world
+from tools import render_timing
 
 WIDTH, HEIGHT, FOV = 640, 480, 90.0
 TYPE_NAMES = (
@@ -41,12 +40,7 @@ TYPE_NAMES = (
     "normals",
 )
 CAMERA_TARGET_MS, LIDAR_TARGET_MS = 50.0, 100.0
-# camera poses over the default world: oblique view of the blocks, close to a wall, looking down at the pad
-POSES = (
-    (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -0.2, 0.6)),
-    (np.array([20.0, 0.0, -4.0]), quat_from_rpy(0.0, 0.0, 0.0)),
-    (np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, -math.pi / 2, 0.0)),
-)
+POSES = render_timing.POSES[:3]  # oblique view of the blocks, close to a wall, looking down at the pad
 LIDAR = {
     "id": "bench_lidar",
     "number-of-channels": 16,
@@ -59,18 +53,10 @@ LIDAR = {
 }
 
 
-def timed_ms(fn: Callable[[int], object], frames: int) -> float:
-    """Median CPU time (ms) of `fn(i)` over `frames` calls, after one warm-up call.
-
-    CPU time of this process, not wall time, so that other load on the machine does not count.
-    """
-    fn(-1)
-    samples = []
-    for i in range(frames):
-        start = time.process_time()
-        fn(i)
-        samples.append((time.process_time() - start) * 1e3)
-    return statistics.median(samples)
+def cpu_ms(fn: Callable[[int], object], frames: int) -> float:
+    """Median CPU time (ms) of `fn(i)` over `frames` calls: CPU time of this process, not wall time, so
+    that other load on the machine does not count."""
+    return render_timing.median_ms(fn, frames, time.process_time)
 
 
 def main() -> None:
@@ -85,11 +71,11 @@ def main() -> None:
 
     results: dict[str, float] = {}
     for kind, name in enumerate(TYPE_NAMES):
-        results[f"camera_{name}_ms"] = timed_ms(camera([kind]), args.frames)
-    results["camera_all_seven_ms"] = timed_ms(camera(list(range(7))), args.frames)
+        results[f"camera_{name}_ms"] = cpu_ms(camera([kind]), args.frames)
+    results["camera_all_seven_ms"] = cpu_ms(camera(list(range(7))), args.frames)
     model = LidarModel.from_config(LIDAR)
     position, orientation = np.array([0.0, 0.0, -4.0]), quat_from_rpy(0.0, 0.0, 0.0)
-    results["lidar_scan_ms"] = timed_ms(
+    results["lidar_scan_ms"] = cpu_ms(
         lambda i: model.scan(world, position, orientation, i * 100_000_000, (i + 1) * 100_000_000),
         args.frames,
     )

@@ -22,11 +22,10 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from tools.bench import scenes
+from tools.bench import scenes, tables
 from tools.bench.e2e import Bench, rotated
 from tools.bench.pose_path import PREVIOUS
 from tools.bench.probe import DEFAULT_MALLOC, MALLOC_CHOICES
-from tools.bench.report import _table
 
 VARIANTS: dict[str, tuple[str, ...]] = {
     "bridge": (),
@@ -139,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
         "CPU runs",
         "pose p99 runs",
     ]
-    print(_table(header, body))
+    print(tables.table(header, body))
     case = f"{drones} drones, 320x240 @10" if args.drones else f"{args.width}x{args.height} @30"
     print(f"{case}; load average {load_start:.1f} at start, {os.getloadavg()[0]:.1f} at end")
     return 0

@@ -9,7 +9,7 @@ for the softirq work of the image streams; nice -10 is the milder of the two.
 
 Kernel threads are outside every autogroup, so their nice value counts against every process. That is
 why renicing them helped, while the larger cause of long gaps was autogroup scheduling itself (the
-render worker's nice value counted only within the server's session; see `simserver/render_worker.py`).
+render worker's nice value counted only within the server's session; see `simserver/render/render_worker.py`).
 
 This changes a machine setting, so only `make soak` applies it, by default and for the length of the run,
 and only as root. docs/host-tuning.md gives the one-line equivalent (`renice`) for running a simulation

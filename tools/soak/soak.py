@@ -23,7 +23,6 @@ SOAK_HOST_TUNING=0 leaves the host alone.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import signal
@@ -31,7 +30,6 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -39,36 +37,15 @@ from airsim_mapper.tuning import SWITCH_INTERVAL_S
 from tools.rig import ROOT, Rig, RigError, descendants
 from tools.soak import hosttune
 from tools.soak.cpu import CpuMark, command_name, cpu_mark, cpu_shares
+from tools.soak.gaps import explain_gaps
+from tools.soak.listener import Listener, node_topics
+from tools.soak.probes import POSE_TOPIC, WAKE_PERIOD_S, pose_probe, read_probe, read_wakes, since, wake_probe
+from tools.soak.verdict import Events, Sample, judge_poses, print_cpu, report
 
 NODE = "soak_hello"
 RELOAD_NODE = "soak_node"
 SCENE = "scene_drone_sensors.jsonc"
-POSE_TOPIC = "/airsim_node/Drone1/actual_pose"
 SAMPLE_PERIOD_S = 5.0
-RSS_LIMIT_MB = 20.0
-THREAD_SLACK = 2
-FD_SLACK = 4
-RELOAD_GRACE_S = 5.0  # after a scene reload or a mapping edit: its gap and samples are reported apart
-POSE_GAP_LIMIT_S = 0.100
-WAKE_PERIOD_S = 0.005  # the wake probe's sleep
-WAKE_LATE_S = 0.005  # a wake-up later than this is written down
-
-
-@dataclass
-class Sample:
-    t: float
-    rss_mb: float
-    threads: int
-    fds: int = 0
-
-
-@dataclass
-class Verdict:
-    failures: list[str] = field(default_factory=list)
-
-    def check(self, ok: bool, message: str) -> None:
-        if not ok:
-            self.failures.append(message)
 
 
 def sample(pid: int, t0: float) -> Sample:
@@ -89,138 +66,6 @@ def cpu_marks(rig: Rig) -> list[CpuMark]:
             label = f"{child.name}/{command_name(pid)}"
             pids[label if label not in pids else f"{label} {pid}"] = pid
     return [mark for name, pid in pids.items() if (mark := cpu_mark(name, pid)) is not None]
-
-
-class Listener:
-    """Subscribes to every topic of the bridge node; counts messages and times actual_pose."""
-
-    def __init__(self) -> None:
-        self.counts: dict[str, int] = {}
-        self.pose_times: list[float] = []
-        self.pose_stamps: list[float] = []  # header stamps (sim time): tells lost messages from late ones
-        self.status: dict = {}
-        self.peaks: dict[str, dict[str, float]] = {}  # per simulator topic: the largest status peaks
-        self.collect_peaks = False
-        self.gc_max_ms = 0.0  # the bridge's longest garbage collection after warm-up
-        self._lock = threading.Lock()
-        self._subs: list = []
-
-    def attach(self, topics: list[str]) -> None:
-        import rospy
-        from std_msgs.msg import String
-
-        for topic in topics:
-            if topic.endswith("/status"):
-                self._subs.append(rospy.Subscriber(topic, String, self._on_status))
-            elif topic == POSE_TOPIC:
-                from geometry_msgs.msg import PoseStamped
-
-                self._subs.append(
-                    rospy.Subscriber(topic, PoseStamped, self._on_pose, queue_size=50, tcp_nodelay=True)
-                )
-            else:
-                self._subs.append(rospy.Subscriber(topic, rospy.AnyMsg, self._counter(topic), queue_size=50))
-
-    def _counter(self, topic: str):
-        def on_message(_msg) -> None:
-            with self._lock:
-                self.counts[topic] = self.counts.get(topic, 0) + 1
-
-        return on_message
-
-    def _on_pose(self, msg) -> None:
-        now = time.monotonic()
-        with self._lock:
-            self.counts[POSE_TOPIC] = self.counts.get(POSE_TOPIC, 0) + 1
-            self.pose_times.append(now)
-            self.pose_stamps.append(msg.header.stamp.to_sec())
-
-    def _on_status(self, msg) -> None:
-        self.status = json.loads(msg.data)
-        if not self.collect_peaks:
-            return
-        with self._lock:
-            self.gc_max_ms = max(self.gc_max_ms, self.status.get("gc_max_ms") or 0.0)
-            for topic, stream in self.status.get("streams", {}).items():
-                mine = self.peaks.setdefault(topic, {})
-                for key, value in stream.items():
-                    if key.endswith("_max_ms"):
-                        mine[key] = max(mine.get(key, 0.0), value)
-
-    def snapshot(self) -> tuple[dict[str, int], list[float], list[float]]:
-        with self._lock:
-            return dict(self.counts), list(self.pose_times), list(self.pose_stamps)
-
-
-def node_topics(node: str) -> list[str]:
-    import rosgraph
-
-    state = rosgraph.Master("/soak").getSystemState()
-    return sorted(topic for topic, nodes in state[0] if f"/{node}" in nodes and topic not in ("/rosout",))
-
-
-def explain_gaps(times: list[float], stamps: list[float], wakes: Wakes | None = None, worst: int = 5) -> None:
-    """Print the largest receive gaps with the sim-time step across them and the lateness after them.
-
-    The headless server's steppable clock runs at wall speed, so `receive time - stamp` is a constant plus
-    the delivery delay; its minimum over the run is the floor. A gap followed by a late message (lateness
-    close to the gap) was a delay on the way; a gap with a matching stamp step and no lateness means no
-    pose was produced or all were dropped. With `wakes`, two more columns: the longest stretch of the gap
-    in which the wake probe was kept waiting (close to the gap, the host held up every process, not only
-    the bridge), and the bridge's own part of the gap (`own_delays`), which the verdict judges.
-    """
-    import numpy as np
-
-    if len(times) < 2:
-        return
-    t, st = np.asarray(times), np.asarray(stamps)
-    gaps, steps = np.diff(t), np.diff(st)
-    late = (t - st) - (t - st).min()
-    host_cells = " / host delay / the bridge's own" if wakes is not None else ""
-    head = "receive gap / sim-time step / lateness after" + host_cells
-    own = own_delays(times, wakes)
-    print(f"largest actual_pose gaps after warm-up ({head}, ms):")
-    for i in np.argsort(gaps)[::-1][:worst]:
-        host = [wakes.largest_within(t[i], t[i + 1]), own[i]] if wakes is not None else []
-        cells = [gaps[i], steps[i], late[i + 1], *host]
-        print("  " + " / ".join(f"{cell * 1000:7.1f}" for cell in cells))
-    print(f"gaps over 50 ms: {int((gaps > 0.05).sum())}, over 100 ms: {int((gaps > 0.1).sum())}")
-    print(
-        f"actual_pose lateness p50 / p99 / max: {np.percentile(late, 50) * 1000:.1f} / "
-        f"{np.percentile(late, 99) * 1000:.1f} / {late.max() * 1000:.1f} ms"
-    )
-
-
-def own_delays(times: list[float], wakes: Wakes | None) -> list[float]:
-    """Each gap between two receive times less the time within it that the host kept the wake probe waiting.
-
-    The wake probe does nothing but sleep, at the bridge's priority: while it waits for a CPU, so does every
-    process of the rig, and a pose gap then says nothing about the bridge. What is left is the delay the
-    bridge (or the server, or the link) added on its own. Without wake-ups, the gaps themselves.
-    """
-    pairs = list(zip(times, times[1:]))
-    if wakes is None:
-        return [end - start for start, end in pairs]
-    return [max(0.0, end - start - wakes.covered_within(start, end)) for start, end in pairs]
-
-
-def across_events(times: list[float], events: list[float], grace: float) -> list[bool]:
-    """Per gap between two receive times: does it overlap an [event, event + grace) window?"""
-    return [
-        any(start < event + grace and end > event for event in events) for start, end in zip(times, times[1:])
-    ]
-
-
-def gap_percentile(times: list[float], q: float) -> float:
-    import numpy as np
-
-    return float(np.percentile(np.diff(times), q)) if len(times) > 1 else float("inf")
-
-
-def largest_gap(times: list[float]) -> float:
-    import numpy as np
-
-    return float(np.diff(times).max()) if len(times) > 1 else float("inf")
 
 
 def tune_host() -> list[hosttune.KernelThread]:
@@ -410,225 +255,6 @@ def run(seconds: float, workdir: Path) -> int:
     host = {"ksoftirqd_nice": hosttune.SOFTIRQ_NICE if tuned else None, "host_speed_ms": speeds}
     host.update(cpu_nice0_cores=nice0_cores, cpus=os.cpu_count(), host_wake_max_ms=host_wake_max_ms)
     return report(*measured, host, events)
-
-
-@dataclass
-class Events:
-    """When (seconds into the run) the mapping was edited and the scene reloaded."""
-
-    edits: list[float] = field(default_factory=list)
-    scenes: list[float] = field(default_factory=list)
-
-    def near(self, t: float) -> bool:
-        """True within RELOAD_GRACE_S after any event: a sample there is left out of the flat checks."""
-        return any(0.0 <= t - event < RELOAD_GRACE_S for event in (*self.edits, *self.scenes))
-
-
-@dataclass
-class PoseJudgement:
-    """The probe's actual_pose gaps: the largest, the bridge's own part (judged), and those across reloads."""
-
-    times: list[float]
-    largest_own_s: float
-    largest_across_reload_s: float | None
-
-
-def judge_poses(times: list[float], wakes: Wakes | None, scenes: list[float]) -> PoseJudgement:
-    """The bridge's own delays (`own_delays`) of the gaps outside a scene reload's window, and apart the
-    largest gap across a reload (a reload rebuilds every bridge: a pause there is expected)."""
-    own = own_delays(times, wakes)
-    gaps = [end - start for start, end in zip(times, times[1:])]
-    near = across_events(times, scenes, RELOAD_GRACE_S)
-    kept = [value for value, skip in zip(own, near) if not skip]
-    across = [gap for gap, skip in zip(gaps, near) if skip]
-    return PoseJudgement(
-        times, max(kept, default=float("inf")), max(across, default=None) if scenes else None
-    )
-
-
-def print_cpu(shares: list[tuple[str, float, int]]) -> float:
-    """Print each process's CPU after warm-up; return the cores used at nice 0 or below (what competes)."""
-    print(f"CPU after warm-up (% of one core, nice value) on {os.cpu_count()} CPUs:")
-    for name, percent, nice in shares:
-        if percent >= 0.5:
-            print(f"  {percent:6.1f}  nice {nice:3d}  {name}")
-    nice0 = sum(percent for _, percent, nice in shares if nice <= 0) / 100.0
-    print(f"  {nice0:6.2f} cores at nice 0 or below, in all")
-    return round(nice0, 2)
-
-
-def report(
-    samples: list[Sample],
-    warmup: float,
-    counts: dict[str, int],
-    counts_at_warmup: dict[str, int],
-    poses: PoseJudgement,
-    monitor_pose_times: list[float],
-    status: dict,
-    seconds: float,
-    host: dict | None = None,
-    events: Events | None = None,
-) -> int:
-    events = events or Events()
-    after = [s for s in samples if s.t >= warmup and not events.near(s.t)]
-    verdict = Verdict()
-    verdict.check(len(after) >= 2, f"run too short for a verdict after the {warmup:.0f} s warm-up")
-    window = max(1e-9, seconds - warmup)
-    rates = {topic: (counts[topic] - counts_at_warmup.get(topic, 0)) / window for topic in sorted(counts)}
-    print("delivered rates after warm-up (Hz):")
-    for topic, rate in rates.items():
-        print(f"  {rate:8.1f}  {topic}")
-    streams = status.get("streams", {})
-    print("bridge streams (received / dropped):")
-    for topic, s in sorted(streams.items()):
-        print(f"  {s['received']:8d} / {s['dropped']:6d}  {topic}")
-    gap, own = largest_gap(poses.times), poses.largest_own_s
-    summary = {
-        "largest_pose_gap_ms": round(gap * 1000, 1),
-        "largest_bridge_delay_ms": round(own * 1000, 1),  # the verdict's figure
-        "p99_pose_gap_ms": round(gap_percentile(poses.times, 99) * 1000, 1),
-        "monitor_largest_pose_gap_ms": round(largest_gap(monitor_pose_times) * 1000, 1),
-        "state": status.get("state"),
-        "sim_losses": status.get("sim_losses"),
-        **(host or {}),
-    }
-    if events.edits or events.scenes:
-        across = poses.largest_across_reload_s
-        summary.update(mapping_edits=len(events.edits), scene_reloads=len(events.scenes))
-        summary.update(largest_pose_gap_across_reload_ms=None if across is None else round(across * 1000, 1))
-        summary.update(reloads_rejected=(status.get("mapping") or {}).get("rejections"))
-    if after:
-        rss_growth = max(s.rss_mb for s in after) - after[0].rss_mb
-        threads, fds = [s.threads for s in after], [s.fds for s in after]
-        summary.update(rss_start_mb=round(after[0].rss_mb, 1), rss_growth_mb=round(rss_growth, 1))
-        summary.update(
-            threads_min=min(threads), threads_max=max(threads), files_min=min(fds), files_max=max(fds)
-        )
-        verdict.check(rss_growth < RSS_LIMIT_MB, f"RSS grew {rss_growth:.1f} MB (limit {RSS_LIMIT_MB:.0f})")
-        verdict.check(
-            max(threads) - min(threads) <= THREAD_SLACK, f"thread count varied {min(threads)}..{max(threads)}"
-        )
-        verdict.check(max(fds) - min(fds) <= FD_SLACK, f"open files varied {min(fds)}..{max(fds)}")
-    verdict.check(
-        own <= POSE_GAP_LIMIT_S,
-        f"the bridge added {own * 1000:.0f} ms to an actual_pose gap on its own (limit 100; the largest gap "
-        f"was {gap * 1000:.0f} ms)",
-    )
-    print("summary: " + json.dumps(summary))
-    print("rates: " + json.dumps({topic: round(rate, 2) for topic, rate in rates.items()}))
-    for failure in verdict.failures:
-        print(f"FAIL: {failure}")
-    print("PASS" if not verdict.failures else "FAIL", flush=True)
-    return 0 if not verdict.failures else 1
-
-
-def pose_probe(out: Path) -> int:
-    """A process that only receives actual_pose (TCP_NODELAY) and writes `receive time, stamp` lines.
-
-    The gap verdict comes from here: the monitor above receives every image and cloud of the bridge, about
-    100 MB/s, and a pause of its own would count against the bridge.
-    """
-    import rospy
-    from geometry_msgs.msg import PoseStamped
-
-    rospy.init_node("soak_pose_probe", anonymous=True, disable_signals=True)
-    sys.setswitchinterval(SWITCH_INTERVAL_S)
-    lines: list[str] = []
-
-    def on_pose(msg) -> None:
-        lines.append(f"{time.monotonic():.6f} {msg.header.stamp.to_sec():.6f}\n")
-
-    rospy.Subscriber(POSE_TOPIC, PoseStamped, on_pose, queue_size=100, tcp_nodelay=True)
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    while not stop.wait(1.0):
-        pass
-    out.write_text("".join(lines))
-    return 0
-
-
-@dataclass
-class Wakes:
-    """What the wake probe saw: its wake-ups and the late ones as (time it fell asleep, delay) pairs."""
-
-    count: int = 0
-    late: list[tuple[float, float]] = field(default_factory=list)
-
-    def since(self, start: float) -> Wakes:
-        """The late wake-ups from `start` on (the count stays the run's)."""
-        return Wakes(self.count, [(t, d) for t, d in self.late if t >= start])
-
-    def largest_within(self, start: float, end: float) -> float:
-        """The longest stretch of [start, end) that a late wake-up's delay covered (0 if none did)."""
-        covered = (min(end, t + WAKE_PERIOD_S + d) - max(start, t + WAKE_PERIOD_S) for t, d in self.late)
-        return max((c for c in covered if c > 0.0), default=0.0)
-
-    def covered_within(self, start: float, end: float) -> float:
-        """How much of [start, end) the late wake-ups' delays covered, overlaps counted once."""
-        spans = sorted(
-            (max(start, t + WAKE_PERIOD_S), min(end, t + WAKE_PERIOD_S + d))
-            for t, d in self.late
-            if t + WAKE_PERIOD_S < end and t + WAKE_PERIOD_S + d > start
-        )
-        total, reached = 0.0, start
-        for low, high in spans:
-            low = max(low, reached)
-            if high > low:
-                total += high - low
-                reached = high
-        return total
-
-    def largest(self) -> float:
-        """The longest delay of the run."""
-        return max((d for _, d in self.late), default=0.0)
-
-    def over(self, limit_s: float) -> int:
-        """How many wake-ups came later than `limit_s`."""
-        return sum(1 for _, d in self.late if d > limit_s)
-
-
-def wake_probe(out: Path) -> int:
-    """A process that only sleeps `WAKE_PERIOD_S` at a time; writes each wake-up late by over 5 ms.
-
-    It runs at the bridge's priority in a session of its own, like every process of the rig, and does
-    nothing else: its delays are the host's scheduling delays, the floor under any pose gap. Each late
-    wake-up is written as it happens; the count of all wake-ups last, on SIGINT.
-    """
-    stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())
-    count = 0
-    with out.open("w") as sink:
-        before = time.monotonic()
-        while not stop.is_set():
-            time.sleep(WAKE_PERIOD_S)
-            now = time.monotonic()
-            if now - before - WAKE_PERIOD_S > WAKE_LATE_S:
-                sink.write(f"{before:.6f} {now - before - WAKE_PERIOD_S:.6f}\n")
-                sink.flush()
-            count += 1
-            before = now
-        sink.write(f"wakes {count}\n")
-    return 0
-
-
-def read_wakes(path: Path) -> Wakes | None:
-    """The wake probe's file; None if it is missing or unfinished (the probe did not stop cleanly)."""
-    lines = path.read_text().splitlines() if path.exists() else []
-    if not lines or not lines[-1].startswith("wakes "):
-        return None
-    rows = [line.split() for line in lines[:-1]]
-    return Wakes(int(lines[-1].split()[1]), [(float(r[0]), float(r[1])) for r in rows])
-
-
-def since(start: float, times: list[float], stamps: list[float]) -> tuple[list[float], list[float]]:
-    """The (receive time, stamp) pairs received at or after `start`."""
-    kept = [(t, st) for t, st in zip(times, stamps) if t >= start]
-    return [t for t, _ in kept], [st for _, st in kept]
-
-
-def read_probe(path: Path) -> tuple[list[float], list[float]]:
-    rows = [line.split() for line in path.read_text().splitlines()] if path.exists() else []
-    return [float(r[0]) for r in rows], [float(r[1]) for r in rows]
 
 
 def main() -> int:

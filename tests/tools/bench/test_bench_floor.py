@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from tools.bench import report, scenes
+from tools.bench import host, results, sampling, scenes, tables, targets
 from tools.bench.__main__ import main, more_rounds
 from tools.bench.e2e import Bench, BenchError
 
@@ -47,16 +47,16 @@ def _e2e(bridge_scale_cores: float = 0.2) -> dict:
 
 
 def test_every_case_through_both_is_printed_with_its_ratio_to_the_forwarder():
-    table = report.floor_table(_e2e())
+    table = tables.floor_table(_e2e())
     lines = {line.split("  ")[0]: line for line in table.splitlines()[2:]}
-    assert set(lines) == {label for _, label in report.FLOOR_ROWS}
+    assert set(lines) == {label for _, label in results.FLOOR_ROWS}
     assert "0.350 / 0.240" in lines["1080p camera @30 + pose"] and "1.46x" in lines["1080p camera @30 + pose"]
     assert "6.00 / 10.00" in lines["1080p camera @30 + pose"] and "0.60x" in lines["1080p camera @30 + pose"]
     assert "2.00x" in lines["720p camera @30 + pose"]
 
 
 def test_the_forwarder_targets_are_judged_on_the_ratios():
-    verdicts = {t["target"]: (round(t["value"], 3), t["met"]) for t in report.floor_targets(_e2e())}
+    verdicts = {t["target"]: (round(t["value"], 3), t["met"]) for t in targets.floor_targets(_e2e())}
     assert verdicts == {
         "pose only: bridge CPU per pose / the forwarder's": (1.25, True),
         # (0.35 - 0.05) / 30 against (0.24 - 0.04) / 30
@@ -69,19 +69,19 @@ def test_the_forwarder_targets_are_judged_on_the_ratios():
         "2 drones: bridge CPU": (0.2, True),
         "2 drones: worst pose p99": (3.0, True),
     }
-    over = {t["target"]: t["met"] for t in report.floor_targets(_e2e(bridge_scale_cores=0.3))}
+    over = {t["target"]: t["met"] for t in targets.floor_targets(_e2e(bridge_scale_cores=0.3))}
     assert over["2 drones: bridge CPU"] is False
 
 
 def test_a_costs_only_run_has_no_end_to_end_figures_to_judge_or_warn_about():
-    assert report.floor_over_target({}) is None and report.rounds_table({}) == ""
-    assert report.floor_targets({}) == [] and report.latency_rounds({}, "scale") == []
+    assert host.floor_over_target({}) is None and tables.rounds_table({}) == ""
+    assert targets.floor_targets({}) == [] and results.latency_rounds({}, "scale") == []
 
 
 def test_without_forwarder_runs_there_is_no_floor_target():
     e2e = _e2e()
     e2e["forwarder"] = {}
-    assert report.floor_targets(e2e) == []
+    assert targets.floor_targets(e2e) == []
 
 
 @pytest.mark.live
@@ -109,7 +109,7 @@ def test_the_drones_and_pose_latency_targets_name_the_forwarder_and_the_receive_
     poses = {scenes.pose_topic(i): (100.0, 2.5) for i in (1, 2)}
     e2e["receive_floor"] = {"scale": _result("receiver", 0.05, poses)}
     e2e["receive_floor"]["camera"] = _result("receiver", 0.05, {POSE: (100.0, 4.5)})
-    rows = {t["target"]: t["note"] for t in report.floor_targets(e2e)}
+    rows = {t["target"]: t["note"] for t in targets.floor_targets(e2e)}
     drones = rows["2 drones: worst pose p99"]
     assert "bridge 3.00 ms, bare forwarder 3.00 ms" in drones and "no ROS: 2.50 ms" in drones
     camera = rows["pose p99 under a 1080p camera @30 / the forwarder's"]
@@ -120,38 +120,38 @@ def test_the_drones_and_pose_latency_targets_name_the_forwarder_and_the_receive_
         == "bare forwarder 0.100 cores; the bridge's receive loop alone, no ROS: 0.050 cores"
     )
     del e2e["receive_floor"]
-    assert not any("no ROS" in t["note"] for t in report.floor_targets(e2e))
-    assert {t["target"]: t["note"] for t in report.floor_targets(e2e)}["2 drones: bridge CPU"] == (
+    assert not any("no ROS" in t["note"] for t in targets.floor_targets(e2e))
+    assert {t["target"]: t["note"] for t in targets.floor_targets(e2e)}["2 drones: bridge CPU"] == (
         "bare forwarder 0.100 cores"
     )
 
 
 def test_a_receive_floor_over_the_drones_latency_target_is_called_out():
     e2e = _e2e()
-    assert report.floor_over_target(e2e) is None  # not measured
+    assert host.floor_over_target(e2e) is None  # not measured
     e2e["receive_floor"] = {"scale": _result("receiver", 0.05, {scenes.pose_topic(1): (100.0, 3.9)})}
-    assert report.floor_over_target(e2e) is None
+    assert host.floor_over_target(e2e) is None
     e2e["receive_floor"]["scale"]["topics"][scenes.pose_topic(2)] = {"rate_hz": 100.0, "latency_p99_ms": 8.8}
-    warning = report.floor_over_target(e2e)
+    warning = host.floor_over_target(e2e)
     assert warning is not None and "8.80 ms, over the 4 ms target" in warning
 
 
 def test_a_forwarder_over_the_drones_cpu_target_is_called_out():
     e2e = _e2e()
-    assert report.forwarder_over_cpu_target({}) is None  # not measured
-    assert report.forwarder_over_cpu_target(e2e) is None  # the forwarder took 0.1 cores
+    assert host.forwarder_over_cpu_target({}) is None  # not measured
+    assert host.forwarder_over_cpu_target(e2e) is None  # the forwarder took 0.1 cores
     e2e["forwarder"]["scale"]["forwarder_cpu_cores"] = 0.4
-    warning = report.forwarder_over_cpu_target(e2e)
+    warning = host.forwarder_over_cpu_target(e2e)
     assert warning is not None and "took 0.400 cores with 2 drones, over the 0.25-core target" in warning
     assert "ratio to the forwarder (0.50x)" in warning  # the bridge's 0.2 cores
 
 
 def test_a_forwarder_over_the_drones_latency_target_is_called_out():
     e2e = _e2e()
-    assert report.forwarder_over_latency_target({}) is None  # not measured
-    assert report.forwarder_over_latency_target(e2e) is None  # the forwarder's worst p99 was 3 ms
+    assert host.forwarder_over_latency_target({}) is None  # not measured
+    assert host.forwarder_over_latency_target(e2e) is None  # the forwarder's worst p99 was 3 ms
     e2e["forwarder"]["scale"]["topics"][scenes.pose_topic(2)]["latency_p99_ms"] = 6.0
-    warning = report.forwarder_over_latency_target(e2e)
+    warning = host.forwarder_over_latency_target(e2e)
     assert warning is not None and "worst pose p99 of 6.00 ms with 2 drones, over the 4 ms target" in warning
     assert "p99 over the forwarder's (0.50x)" in warning  # the bridge's 3 ms
 
@@ -171,15 +171,18 @@ def test_the_receive_floor_takes_every_robots_poses_without_ros(tmp_path):
 
 
 def _with_baselines(e2e: dict) -> dict:
-    """The results `report.targets` reads: converter costs within their limits, and the raw baselines (a
+    """The results `targets.targets` reads: converter costs within their limits, and the raw baselines (a
     1080p frame received in 4.5 ms and published in 3 ms of CPU), beside `e2e` without its scale runs."""
 
     def raw(role: str, cores: float) -> dict:
         topics = {"/bench/raw": {"rate_hz": 30.0, "latency_p50_ms": 10.0, "latency_p99_ms": 12.0}}
         return {f"{role}_cpu_cores": cores, "topics": topics}
 
-    costs = {report.LIDAR: {"bridge_ms": 1.0, "speedup_vs_reference": 20.0}, report.DEPTH: {"bridge_ms": 1.0}}
-    costs[report.BGR] = {"ratio_to_bare_serialize": 1.0, "bare_serialize_ms": 2.0}
+    costs = {
+        results.LIDAR: {"bridge_ms": 1.0, "speedup_vs_reference": 20.0},
+        results.DEPTH: {"bridge_ms": 1.0},
+    }
+    costs[results.BGR] = {"ratio_to_bare_serialize": 1.0, "bare_serialize_ms": 2.0}
     baselines = {"rospy_image": raw("publisher", 0.09), "pynng_image": raw("receiver", 0.135)}
     return {"costs": costs, "e2e": {**e2e, "baselines": baselines, "scale": {}}}
 
@@ -187,7 +190,7 @@ def _with_baselines(e2e: dict) -> dict:
 def test_the_bridge_cpu_per_frame_is_judged_against_receiving_and_publishing_it_raw():
     (row,) = [
         t
-        for t in report.targets(_with_baselines(_e2e()))
+        for t in targets.targets(_with_baselines(_e2e()))
         if t["target"].startswith("1080p BGR bridge CPU per")
     ]
     # (0.35 - 0.05) / 30 = 10 ms a frame, against 4.5 ms to receive it and 3 ms to publish it
@@ -212,7 +215,7 @@ def test_the_pose_latency_targets_are_judged_on_the_median_of_the_interleaved_ro
         "camera": [{"bridge": b, "forwarder": f} for b, f in zip(camera, forwarded)],
         "scale": [_round(5.0, 6.0, 4.5, 0.3), _round(4.5, 6.0, 4.2, 0.26)],
     }
-    rows = {t["target"]: t for t in report.floor_targets(e2e)}
+    rows = {t["target"]: t for t in targets.floor_targets(e2e)}
     camera_row = rows["pose p99 under a 1080p camera @30 / the forwarder's"]
     assert round(camera_row["value"], 3) == 0.9 and camera_row["met"] is False  # 0.6, 0.9, 1.2
     assert camera_row["note"].startswith("median of 3 interleaved rounds (0.60x, 0.90x, 1.20x); round 1: ")
@@ -225,23 +228,23 @@ def test_the_pose_latency_targets_are_judged_on_the_median_of_the_interleaved_ro
         "their medians: bare forwarder 0.100 cores; the bridge's receive loop alone, no ROS: 0.050 cores"
     )
     # the receive loop was measured in rounds 2 and 3 only: its median is over those
-    assert "4.35 ms (the median of 2 rounds), over" in (report.floor_over_target(e2e) or "")
+    assert "4.35 ms (the median of 2 rounds), over" in (host.floor_over_target(e2e) or "")
     # the forwarder's worst p99: 3, 6, 6 ms; the bridge's 3, 5, 4.5 ms
-    warning = report.forwarder_over_latency_target(e2e) or ""
+    warning = host.forwarder_over_latency_target(e2e) or ""
     assert "6.00 ms with 2 drones (the median of 3 rounds)" in warning and "(0.75x)" in warning
     e2e["rounds"]["scale"][0]["forwarder"]["host_stolen_share"] = 0.02  # round 2 disturbed: left out
-    warning = report.forwarder_over_latency_target(e2e) or ""
+    warning = host.forwarder_over_latency_target(e2e) or ""
     assert "4.50 ms with 2 drones (the median of 2 rounds)" in warning and "(0.83x)" in warning
     del e2e["rounds"]["scale"][0]["forwarder"]["host_stolen_share"]
-    table = report.rounds_table(e2e)
+    table = tables.rounds_table(e2e)
     assert "1080p camera @30 + pose, round 3" in table and "12.00 / 10.00 / -" in table
     assert "10 drones, round 2" in table and "5.00 / 6.00 / 4.50" in table and "0.300 / 0.100" in table
 
 
 def test_with_one_round_there_is_no_rounds_table_and_the_round_is_the_figure():
     e2e = _e2e()
-    assert report.rounds_table(e2e) == ""
-    rows = {t["target"]: t for t in report.floor_targets(e2e)}
+    assert tables.rounds_table(e2e) == ""
+    rows = {t["target"]: t for t in targets.floor_targets(e2e)}
     assert not rows["2 drones: worst pose p99"]["note"].startswith("median")
 
 
@@ -251,7 +254,7 @@ def test_a_round_without_a_ratio_is_shown_and_left_out_of_the_median():
     bridge = _result("bridge", 0.3, {POSE: (100.0, 9.0), IMAGE: (30.0, 20.0)})
     e2e["rounds"] = {"camera": [{"bridge": bridge, "forwarder": flat}, {"bridge": bridge, "forwarder": flat}]}
     (row,) = [
-        t for t in report.floor_targets(e2e) if t["target"].startswith("pose p99 under a 1080p camera @30")
+        t for t in targets.floor_targets(e2e) if t["target"].startswith("pose p99 under a 1080p camera @30")
     ]
     assert row["value"] == 0.6 and row["note"].startswith("median of 1 interleaved round (0.60x, -, -)")
 
@@ -268,7 +271,7 @@ def test_the_60_hz_camera_case_is_judged_on_the_median_of_its_rounds_the_mission
             {"bridge": loaded("bridge", 100.0, 11.0), "forwarder": loaded("forwarder", 95.0, 20.0)},
         ]
     }
-    rows = {t["target"]: t for t in report.targets(_with_baselines(e2e))}
+    rows = {t["target"]: t for t in targets.targets(_with_baselines(e2e))}
     rate = rows["pose rate under a 1080p camera @60"]
     assert (rate["value"], rate["met"]) == (99.0, True)  # 99, 97, 100
     assert rate["note"] == "median of 3 interleaved rounds (99.0 Hz, 97.0 Hz, 100.0 Hz)"
@@ -280,7 +283,7 @@ def test_the_60_hz_camera_case_is_judged_on_the_median_of_its_rounds_the_mission
     assert node["note"].startswith("median of 3 interleaved rounds (9.00 ms, 12.00 ms, 11.00 ms); idle p99")
     mission = rows["pose p99 under 1080p camera load at 60 Hz (saturating), mission script"]
     assert (mission["value"], mission["met"]) == (10.5, False) and mission["note"].startswith("idle p99")
-    assert "1080p camera @60 + pose, round 3" in report.rounds_table(e2e)
+    assert "1080p camera @60 + pose, round 3" in tables.rounds_table(e2e)
 
 
 def test_each_round_shows_the_cpu_time_the_hypervisor_took_during_each_window():
@@ -289,7 +292,7 @@ def test_each_round_shows_the_cpu_time_the_hypervisor_took_during_each_window():
     forwarder = _result("forwarder", 0.2, {POSE: (100.0, 10.0), IMAGE: (30.0, 15.0)})
     e2e["bridge"]["camera"]["host_stolen_share"] = 0.021
     e2e["rounds"] = {"camera": [{"bridge": {**bridge, "host_stolen_share": 0.125}, "forwarder": forwarder}]}
-    table = report.rounds_table(e2e)
+    table = tables.rounds_table(e2e)
     assert "CPU time stolen %" in table
     round_1, round_2 = (line for line in table.splitlines() if "1080p camera @30 + pose, round" in line)
     assert round_1.rstrip(" |").endswith("2.1 / - / -")  # round 1 had no forwarder or floor figure
@@ -315,12 +318,12 @@ def test_a_round_that_lost_cpu_time_to_the_hypervisor_is_shown_and_left_out_of_t
                 "forwarder": forwarder,
             },
             # 0.5% of the CPU time stolen in the forwarder's window is enough to leave the round out
-            {"bridge": slow, "forwarder": _stolen(forwarder, report.QUIET_STOLEN_SHARE)},
+            {"bridge": slow, "forwarder": _stolen(forwarder, sampling.QUIET_STOLEN_SHARE)},
             {"bridge": _stolen(slow, 0.111), "forwarder": forwarder},
         ],
         "scale": [steady, disturbed],
     }
-    rows = {t["target"]: t for t in report.floor_targets(e2e)}
+    rows = {t["target"]: t for t in targets.floor_targets(e2e)}
     camera = rows["pose p99 under a 1080p camera @30 / the forwarder's"]
     assert (round(camera["value"], 3), camera["met"]) == (0.65, True)  # 0.6 and 0.7; 1.5 and 1.5 left out
     assert camera["note"].startswith(
@@ -330,8 +333,8 @@ def test_a_round_that_lost_cpu_time_to_the_hypervisor_is_shown_and_left_out_of_t
     assert p99["value"] == 4.0 and "rounds (3.00 ms, 5.00 ms), 1 more left out" in p99["note"]
     assert rows["2 drones: bridge CPU"]["value"] == 0.25  # 0.2 and 0.3, the 0.4 left out
     # the receive loop's figures: 4.5 ms in round 2; round 3's 8 ms is left out with its round
-    assert "a worst p99 of 4.50 ms, over" in (report.floor_over_target(e2e) or "")
-    table = report.rounds_table(e2e)
+    assert "a worst p99 of 4.50 ms, over" in (host.floor_over_target(e2e) or "")
+    table = tables.rounds_table(e2e)
     assert "1080p camera @30 + pose, round 2 " in table
     assert "1080p camera @30 + pose, round 3 (left out)" in table
     assert "1080p camera @30 + pose, round 4 (left out)" in table and "10 drones, round 3 (left out)" in table
@@ -344,10 +347,10 @@ def test_when_no_round_was_quiet_every_round_is_judged():
     forwarder = _result("forwarder", 0.2, {POSE: (100.0, 10.0), IMAGE: (30.0, 15.0)})
     e2e["rounds"] = {"camera": [{"bridge": _stolen(bridge, 0.03), "forwarder": forwarder}]}
     (row,) = [
-        t for t in report.floor_targets(e2e) if t["target"].startswith("pose p99 under a 1080p camera @30")
+        t for t in targets.floor_targets(e2e) if t["target"].startswith("pose p99 under a 1080p camera @30")
     ]
     assert row["value"] == 0.75 and row["note"].startswith("median of 2 interleaved rounds (0.60x, 0.90x); ")
-    assert "(left out)" not in report.rounds_table(e2e)
+    assert "(left out)" not in tables.rounds_table(e2e)
 
 
 class _RecordingBench:
@@ -424,10 +427,10 @@ def test_pose_only_cpu_is_judged_on_the_median_of_its_rounds():
             for bridge in (0.06, 0.04)
         ]
     }
-    row = next(t for t in report.floor_targets(e2e) if t["target"].startswith("pose only"))
+    row = next(t for t in targets.floor_targets(e2e) if t["target"].startswith("pose only"))
     assert row["value"] == pytest.approx(1.25) and row["met"] is True
     assert row["note"] == "median of 3 interleaved rounds (1.25x, 1.50x, 1.00x)"
-    table = report.rounds_table(e2e)
+    table = tables.rounds_table(e2e)
     assert "pose @100, round 3" in table and "0.040 / 0.040" in table
 
 
@@ -439,7 +442,7 @@ def test_pose_only_cpu_is_judged_on_each_nodes_cpu_over_its_probes_in_the_same_w
     slow = _result("bridge", 0.08, {POSE: (100.0, 1.0)}) | {"probe_cpu_cores": 0.016}
     fast = _result("forwarder", 0.04, {POSE: (100.0, 1.0)}) | {"probe_cpu_cores": 0.008}
     e2e["rounds"] = {"pose_idle": [{"bridge": slow, "forwarder": fast}] * 2}
-    row = next(t for t in report.floor_targets(e2e) if t["target"].startswith("pose only"))
+    row = next(t for t in targets.floor_targets(e2e) if t["target"].startswith("pose only"))
     assert row["value"] == pytest.approx(1.0) and row["met"] is True
     assert row["note"] == (
         "median of 3 interleaved rounds (1.00x, 1.00x, 1.00x); "

@@ -12,7 +12,7 @@ import time
 import pytest
 from harness import ROOT
 
-from tools.bench import report
+from tools.bench import host, tables
 from tools.bench.e2e import quietest
 from tools.bench.sampling import (
     QUIET_STOLEN_SHARE,
@@ -58,7 +58,7 @@ def _machine(stolen: float, p99: float) -> dict:
 
 
 def test_the_host_line_says_what_the_hypervisor_took_and_how_late_a_sleep_woke():
-    line = report.host_line(_machine(0.021, 0.76))
+    line = host.host_line(_machine(0.021, 0.76))
     assert line == (
         "host: 2.1% of the CPU time stolen by the hypervisor during the run (1.7% since boot); idle before "
         "the run, a 1 ms sleep overshot by 0.11 ms at the median, 0.76 ms at p99, 3.40 ms at most"
@@ -66,7 +66,7 @@ def test_the_host_line_says_what_the_hypervisor_took_and_how_late_a_sleep_woke()
 
 
 def test_the_host_line_counts_the_windows_taken_again():
-    line = report.host_line({**_machine(0.021, 0.76), "windows": 40, "windows_retaken": 3})
+    line = host.host_line({**_machine(0.021, 0.76), "windows": 40, "windows_retaken": 3})
     assert line.endswith("at most; 3 of 40 measurement windows taken again for losing 0.5% or more")
 
 
@@ -98,7 +98,7 @@ def test_a_window_that_lost_cpu_time_is_measured_again_and_the_quietest_kept(sha
     [(0.02, 0.2, False), (0.049, 0.99, False), (0.05, 0.2, True), (0.02, 1.0, True), (0.12, 7.0, True)],
 )
 def test_a_host_past_either_limit_is_called_noisy(stolen, p99, noisy):
-    warning = report.noisy_host(_machine(stolen, p99))
+    warning = host.noisy_host(_machine(stolen, p99))
     assert (warning is not None) == noisy
     if noisy:
         assert warning.startswith(f"warning: the host was noisy ({100 * stolen:.1f}% of the CPU time stolen")
@@ -140,5 +140,5 @@ def test_the_threads_cpu_counts_what_a_thread_of_this_process_spent():
 
 
 def test_the_waiting_nodes_row_shows_its_cpu_to_a_thousandth_of_a_core():
-    row = report.waiting_row({"bridge_cpu_cores": 0.00453, "bridge_rss_mb": 98.6})
+    row = tables.waiting_row({"bridge_cpu_cores": 0.00453, "bridge_rss_mb": 98.6})
     assert row == ["bridge waiting for a scene", "-", "-", "-", "0.005 (bridge)", "-", "99"]

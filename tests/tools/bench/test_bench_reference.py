@@ -7,7 +7,7 @@ import pytest
 
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.context import ConvertContext
-from tools.bench import costs, reference, report
+from tools.bench import costs, reference, results, targets
 
 
 def test_the_reference_lidar_packs_the_nwu_flipped_points_the_bridge_gives_in_enu():
@@ -60,14 +60,20 @@ def test_the_bridge_cost_takes_the_node_s_path_and_sends_the_pixels_from_the_fra
 
 def test_converter_costs_are_judged_against_the_issue_limits():
     measured = {
-        report.LIDAR: {"bridge_ms": 6.0, "speedup_vs_reference": 12.0},
-        report.DEPTH: {"bridge_ms": 4.0},
-        report.BGR: {"ratio_to_bare_serialize": 1.5, "bare_serialize_ms": 2.0},
+        results.LIDAR: {"bridge_ms": 6.0, "speedup_vs_reference": 12.0},
+        results.DEPTH: {"bridge_ms": 4.0},
+        results.BGR: {"ratio_to_bare_serialize": 1.5, "bare_serialize_ms": 2.0},
     }
-    verdicts = {t["target"]: t["met"] for t in report.targets({"costs": measured})}
+    verdicts = {t["target"]: t["met"] for t in targets.targets({"costs": measured})}
     assert verdicts == {
         "100k-point scan, frame bytes -> PointCloud2, CPU": False,
         "100k-point scan, speed-up over the reference": True,
         "1080p depth, frame bytes -> Image, CPU": True,
         "1080p BGR bridge CPU / bare rospy serialisation of the same bytes": False,
     }
+
+
+def test_every_cost_limit_judges_a_case_the_bench_measures():
+    measured = {case.name for case in costs.cases()}
+    assert {limit.case for limit in targets.COST_LIMITS} <= measured
+    assert measured == {results.BGR, results.DEPTH, results.DEPTH_FLOAT, results.LIDAR, results.RADAR}

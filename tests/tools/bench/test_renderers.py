@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tools.bench import renderers, report
+from tools.bench import renderers, results, targets
 
 
 def test_a_short_run_measures_both_renderers_and_reports_them_side_by_side(monkeypatch):
@@ -16,7 +16,7 @@ def test_a_short_run_measures_both_renderers_and_reports_them_side_by_side(monke
             assert figures["renders_per_s"] > 0 and figures["wall_ms"] > 0 and figures["cpu_ms"] >= 0
     table = renderers.table(results)
     assert all(name in table for name in small) and "GL/raycast" in table
-    rows = [r for r in report.targets({"costs": _costs(), "renderers": results}) if r["unit"] == "/s"]
+    rows = [r for r in targets.targets({"costs": _costs(), "renderers": results}) if r["unit"] == "/s"]
     assert [r["limit"] for r in rows] == list(renderers.TARGETS.values())
     assert all(r["met"] == (r["value"] >= r["limit"]) for r in rows)
 
@@ -27,10 +27,10 @@ def test_targets_are_not_applicable_without_a_gl_context():
 
 
 def _costs() -> dict:
-    """The converter-cost entries report.targets reads, with passing values."""
+    """The converter-cost entries targets.targets reads, with passing values."""
     lidar = {"bridge_ms": 1.0, "speedup_vs_reference": 20.0}
     return {
-        report.LIDAR: lidar,
-        report.DEPTH: {"bridge_ms": 1.0},
-        report.BGR: {"ratio_to_bare_serialize": 1.0},
+        results.LIDAR: lidar,
+        results.DEPTH: {"bridge_ms": 1.0},
+        results.BGR: {"ratio_to_bare_serialize": 1.0},
     }

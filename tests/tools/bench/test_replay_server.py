@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from airsim_mapper.simserver import camera_model, lidar_model, rendering
-from airsim_mapper.simserver.camera_model import RenderRequest
+from airsim_mapper.simserver.render import camera_model, rendering
+from airsim_mapper.simserver.render.camera_model import RenderRequest
+from airsim_mapper.simserver.sensors import lidar_model
 from tools.bench import replay_server
 
 
