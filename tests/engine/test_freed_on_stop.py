@@ -1,6 +1,6 @@
 """What a live mapping edit stops is freed by reference counting, with no garbage collection: the node
-freezes its heap (engine/process_tuning.py), and a reference cycle in there is never collected (docs/reliability.md,
-"A reload's memory")."""
+freezes its heap (engine/process_tuning.py), and a reference cycle in there is never collected
+(docs/reliability.md, "A reload's memory")."""
 
 from __future__ import annotations
 
