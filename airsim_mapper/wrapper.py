@@ -24,6 +24,11 @@ from typing import Any
 
 import rospy
 
+from airsim_mapper.common.errors import AirsimMapperError
+from airsim_mapper.common.logs import caller_logger, ros_logger, wait_for_rosout
+from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT
+from airsim_mapper.common.resources import DEFAULT_MAPPING
+from airsim_mapper.common.tuning import keep_frame_buffers
 from airsim_mapper.engine import (
     MAX_FRAME_MB,
     SHUTDOWN_TIMEOUT_S,
@@ -36,16 +41,11 @@ from airsim_mapper.engine import (
     close_client,
     open_client,
 )
-from airsim_mapper.errors import AirsimMapperError
-from airsim_mapper.logs import caller_logger, ros_logger, wait_for_rosout
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.names import resolve_namespace
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
-from airsim_mapper.resources import DEFAULT_MAPPING
-from airsim_mapper.scene import Scene, scene_from_config
-from airsim_mapper.tuning import keep_frame_buffers
+from airsim_mapper.mapping.scene import Scene, scene_from_config
 
 log = ros_logger("airsim_mapper")
 

@@ -21,7 +21,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # run from a checkout without install
 
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT  # noqa: E402
+from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT  # noqa: E402
 
 log = logging.getLogger("rosout.hello_ros")
 

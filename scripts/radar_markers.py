@@ -2,7 +2,7 @@
 """radar_markers: republishes radar_msgs/RadarScan as visualization_msgs/MarkerArray for RViz.
 
 RViz has no display for radar_msgs, so this node turns each scan into one SPHERE_LIST marker in the
-radar's frame (`airsim_mapper.rviz_radar`). Run it with the venv's python (it needs the generated
+radar's frame (`airsim_mapper.convert.rviz_radar`). Run it with the venv's python (it needs the generated
 radar_msgs). `--convention frd` matches mappings/default.yaml, `--convention flu` mappings/enu.yaml.
 """
 
@@ -33,7 +33,7 @@ def run(argv: list[str]) -> int:
     from radar_msgs.msg import RadarScan
     from visualization_msgs.msg import MarkerArray
 
-    from airsim_mapper.rviz_radar import MarkerStyle, scan_markers
+    from airsim_mapper.convert.rviz_radar import MarkerStyle, scan_markers
 
     args = parse_args(rospy.myargv(argv)[1:])
     rospy.init_node("radar_markers")

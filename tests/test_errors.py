@@ -10,9 +10,9 @@ import pytest
 
 import airsim_mapper
 from airsim_mapper.cli.errors import CliError
+from airsim_mapper.common.errors import AirsimMapperError, ConfigError
 from airsim_mapper.convert.errors import ConvertError
 from airsim_mapper.engine.errors import EngineError
-from airsim_mapper.errors import AirsimMapperError, ConfigError
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.simserver.errors import SimServerError
 
@@ -58,7 +58,7 @@ def test_each_exception_sits_under_its_subpackages_base(cls):
 
 
 def test_no_two_exceptions_share_a_name_so_a_traceback_says_which_is_meant():
-    from airsim_mapper.scene import SceneConfigError
+    from airsim_mapper.mapping.scene import SceneConfigError
 
     assert issubclass(SceneConfigError, ConfigError)
     names = [cls.__name__ for cls in EXCEPTIONS]

@@ -8,8 +8,8 @@ import time
 
 import pytest
 
-from airsim_mapper import files
-from airsim_mapper.files import ConfigFileError, read_config_text
+from airsim_mapper.common import files
+from airsim_mapper.common.files import ConfigFileError, read_config_text
 
 
 def test_a_regular_file_is_read_as_text(tmp_path):

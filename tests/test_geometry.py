@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from airsim_mapper.geometry import (
+from airsim_mapper.common.geometry import (
     compose,
     q_conjugate,
     q_mul,

@@ -1,9 +1,9 @@
 """The package's layers, checked by reading every import (module level and inside functions) with `ast`.
 
-The layers, top to bottom (`LAYERS`): cli; wrapper; engine; mapping (with scene.py); convert and
-simserver, peers that never import each other; the leaf modules. A module imports only its own layer (its
-own group of it) or a lower one. Every module of the package is in exactly one layer. Besides:
-- mapping/ and scene.py run without ROS: nothing they import, directly or through other modules of the
+The layers, top to bottom (`LAYERS`): cli; wrapper; engine; mapping; convert and simserver, peers that
+never import each other; common/, the shared leaves. A module imports only its own layer (its own group of
+it) or a lower one. Every module of the package is in exactly one layer. Besides:
+- mapping/ runs without ROS: nothing they import, directly or through other modules of the
   package, is rospy, genpy, a message package or another ROS library;
 - convert/ does not import rospy (message classes and genpy.Time only);
 - nothing in the package imports the tools;
@@ -35,22 +35,9 @@ LAYERS: Layers = (
     (("airsim_mapper.cli",),),
     (("airsim_mapper.wrapper",),),
     (("airsim_mapper.engine",),),
-    (("airsim_mapper.mapping", "airsim_mapper.scene"),),
-    (("airsim_mapper.convert", "airsim_mapper.rviz_radar"), ("airsim_mapper.simserver",)),
-    (
-        (
-            "airsim_mapper.errors",
-            "airsim_mapper.files",
-            "airsim_mapper.geometry",
-            "airsim_mapper.image_types",
-            "airsim_mapper.logs",
-            "airsim_mapper.nng_wait",
-            "airsim_mapper.ports",
-            "airsim_mapper.resources",
-            "airsim_mapper.ros_types",
-            "airsim_mapper.tuning",
-        ),
-    ),
+    (("airsim_mapper.mapping",),),
+    (("airsim_mapper.convert",), ("airsim_mapper.simserver",)),
+    (("airsim_mapper.common",),),
 )
 PACKAGE_ROOT = "airsim_mapper"  # its __init__ holds the version only: below every layer
 SIM = "airsim_mapper.simserver"  # its __init__ holds a docstring only: below every room
@@ -65,7 +52,6 @@ ROOMS: Layers = (
     ((f"{SIM}.motion",),),
     ((f"{SIM}.errors",),),
 )
-LEAVES = frozenset(LAYERS[-1][0])
 ROS_LIBRARIES = frozenset({"rospy", "genpy", "roslib", "rosgraph", "tf2_ros", "tf2_py", "message_filters"})
 
 
@@ -168,7 +154,7 @@ def layer_problems(graph: dict[str, set[str]], layers: Layers = LAYERS) -> list[
 
 
 def ros_free_problems(graph: dict[str, set[str]]) -> list[str]:
-    roots = [name for name in graph if in_layer(name, "airsim_mapper.mapping", "airsim_mapper.scene")]
+    roots = [name for name in graph if in_layer(name, "airsim_mapper.mapping")]
     return sorted(
         f"{module} imports {target}"
         for module in reachable(graph, roots)

@@ -8,7 +8,7 @@ import time
 import pynng
 import pytest
 
-from airsim_mapper.nng_wait import MessageWait
+from airsim_mapper.common.nng_wait import MessageWait
 
 
 def test_a_wait_is_empty_after_its_time_and_ready_with_a_message(tmp_path):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import inspect
 import logging
 
-from airsim_mapper.logs import ros_logger
+from airsim_mapper.common.logs import ros_logger
 
 
 def test_a_record_names_the_calling_file_function_and_line_where_rospy_set_the_logger_class(caplog):
@@ -33,7 +33,7 @@ def test_a_process_waits_for_rosout_once_so_the_node_s_own_wrapper_does_not_wait
     import rosgraph
     from rospy.impl import rosout
 
-    from airsim_mapper import logs
+    from airsim_mapper.common import logs
 
     class Unconnected:
         def get_num_connections(self) -> int:

@@ -16,11 +16,10 @@ import numpy as np
 import pytest
 from harness import ROOT, SIM_CONFIG
 
+from airsim_mapper.common.geometry import quat_from_rpy
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.radar import radar_scan
-from airsim_mapper.geometry import quat_from_rpy
-from airsim_mapper.mapping.pipeline import load_and_expand
-from airsim_mapper.rviz_radar import (
+from airsim_mapper.convert.rviz_radar import (
     STRONG_RGBA,
     WEAK_RGBA,
     MarkerStyle,
@@ -29,6 +28,7 @@ from airsim_mapper.rviz_radar import (
     return_points,
     scan_markers,
 )
+from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.simserver.sensors.radar_model import RadarModel
 from airsim_mapper.simserver.world.world_file import load_world
 from tools.screenshot import rviz_config, watch

@@ -11,9 +11,9 @@ import json
 import sys
 from pathlib import Path
 
+from airsim_mapper.common.resources import SCHEMA_PATH
 from airsim_mapper.convert.catalog import CONVERTERS, converters_markdown
 from airsim_mapper.mapping.model import DOMAIN_VARIABLES
-from airsim_mapper.resources import SCHEMA_PATH
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "converters.md"

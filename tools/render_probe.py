@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.common.geometry import quat_to_matrix
 from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer
 from airsim_mapper.simserver.render.camera_model import RenderRequest
 from airsim_mapper.simserver.world.world import World
@@ -116,7 +116,7 @@ def main() -> None:
     parser.add_argument("--renders", type=int, default=20)
     parser.add_argument("--sphere-segments", type=int, default=32)
     args = parser.parse_args()
-    from airsim_mapper.tuning import limit_blas_threads
+    from airsim_mapper.common.tuning import limit_blas_threads
 
     limit_blas_threads(1)
     world = load_world()

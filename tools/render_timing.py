@@ -10,7 +10,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_from_rpy
+from airsim_mapper.common.geometry import quat_from_rpy
 
 # oblique over the blocks, facing a wall at 8 m, straight down at the pad, towards the ball
 POSES = (

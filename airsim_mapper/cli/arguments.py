@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
-from airsim_mapper.resources import sim_config_dir
+from airsim_mapper.common.resources import sim_config_dir
 
 EXIT_OK, EXIT_INVALID, EXIT_USAGE = 0, 1, 2
 MAPPING_HELP = "the mapping YAML file, or a shipped mapping's name (default, enu)"

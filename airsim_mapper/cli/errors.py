@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.common.errors import AirsimMapperError
 
 __all__ = ["CliError", "FlavourError", "SettingError"]
 

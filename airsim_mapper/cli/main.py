@@ -22,11 +22,11 @@ from airsim_mapper.cli.arguments import (
     add_scene_arguments,
     parse,
 )
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.resources import ros_setup_file
 from airsim_mapper.convert import catalog
-from airsim_mapper.errors import ConfigError
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
-from airsim_mapper.resources import ros_setup_file
 
 HEADERS = ("ROS name", "type", "direction", "simulator", "frame", "bridge")
 

@@ -44,8 +44,8 @@ from airsim_mapper.cli.settings import (
     values,
 )
 from airsim_mapper.cli.startup import StartUp, Stopper, connect
-from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import ros_logger, wait_for_rosout
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.logs import ros_logger, wait_for_rosout
 from airsim_mapper.mapping.expand import namespace_variables
 from airsim_mapper.mapping.names import resolve_namespace, ros_namespace
 
@@ -61,8 +61,8 @@ WAITING_FOR_SCENE = "no --scene: waiting for a scene file name on"  # logged wit
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
+    from airsim_mapper.common.resources import shipped_mappings
     from airsim_mapper.engine import MAX_FRAME_MB, SHUTDOWN_TIMEOUT_S
-    from airsim_mapper.resources import shipped_mappings
 
     *others, last = (f"--{switch}" for switch in SWITCHES_ONLY)
     switches_only = f"{', '.join(others)} and {last}"
@@ -159,7 +159,7 @@ def listening(uri: str, timeout: float) -> bool:
     XML-RPC call to a host that does not answer would wait for the system's connect timeout)."""
     from urllib.parse import urlsplit
 
-    from airsim_mapper.ports import accepts_connections
+    from airsim_mapper.common.ports import accepts_connections
 
     try:
         parts = urlsplit(uri)

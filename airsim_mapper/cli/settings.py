@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from airsim_mapper.cli.errors import SettingError
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT, port
-from airsim_mapper.resources import DEFAULT_SIM_CONFIG
+from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT, port
+from airsim_mapper.common.resources import DEFAULT_SIM_CONFIG
 
 __all__ = [
     "SETTINGS",
@@ -96,7 +96,7 @@ def values(resolved: dict[str, Resolved]) -> dict[str, Any]:
 
 def _sim_config_fallback(resolved: dict[str, Resolved]) -> dict[str, Resolved]:
     """The default sim_config/ is the working directory's; where there is none, the package's own."""
-    from airsim_mapper.resources import package_sim_config
+    from airsim_mapper.common.resources import package_sim_config
 
     current = resolved["simconfigpath"]
     if current.source != DEFAULT or Path(current.value).is_dir():

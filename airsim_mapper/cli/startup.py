@@ -19,9 +19,9 @@ from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.engine import Backoff, SimSilent, SimUnreachable, open_client, retry_quietly
-from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import ros_logger
 
 if TYPE_CHECKING:
     from airsim_mapper.mapping.pipeline import Prepared

@@ -21,14 +21,14 @@ from airsim_mapper.cli.arguments import (
     add_scene_arguments,
     parse,
 )
-from airsim_mapper.errors import ConfigError
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.resources import mapping_path
 from airsim_mapper.mapping.expand import selected
 from airsim_mapper.mapping.match import describe
 from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.pipeline import load_and_expand
 from airsim_mapper.mapping.report import bridge_row, format_rows, format_table, rule_row
-from airsim_mapper.resources import mapping_path
-from airsim_mapper.scene import Scene
+from airsim_mapper.mapping.scene import Scene
 
 __all__ = ["format_table", "load_and_expand", "main"]
 
@@ -90,7 +90,7 @@ def resolved_yaml(spec: str) -> str:
     """The valid mapping `spec` with its extends chain merged in, as a standalone YAML mapping."""
     import yaml
 
-    from airsim_mapper.files import read_config_text
+    from airsim_mapper.common.files import read_config_text
     from airsim_mapper.mapping.extends import resolved_document
     from airsim_mapper.mapping.loader import load_mapping
 

@@ -25,11 +25,11 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.common.logs import shorten
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.entries.commands import VELOCITY_FRAMES
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.logs import shorten
 
 BODY = next(iter(VELOCITY_FRAMES))  # cmd_vel's default frame
 DEFAULT_DURATION_S = 3.0

@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from airsim_mapper.common.geometry import Quat, Vec3, q_mul, quat_conjugate, quat_multiply
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.geometry import Quat, Vec3, q_mul, quat_conjugate, quat_multiply
 
 _H = math.sqrt(0.5)
 

@@ -20,12 +20,12 @@ from typing import Any
 from geometry_msgs.msg import Twist, Vector3
 from nav_msgs.msg import Odometry
 
+from airsim_mapper.common.geometry import Quat, Vec3, q_conjugate, q_mul, q_normalized, q_rotate
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.pose import ros_pose
 from airsim_mapper.convert.stamps import sim_header, sim_stamp
-from airsim_mapper.geometry import Quat, Vec3, q_conjugate, q_mul, q_normalized, q_rotate
 
 ODOMETRY_KEY = "odometry"
 

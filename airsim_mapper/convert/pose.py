@@ -9,11 +9,11 @@ from typing import Any
 import numpy as np
 from geometry_msgs.msg import Pose, PoseStamped
 
+from airsim_mapper.common.geometry import OriginError, compose, parse_origin
 from airsim_mapper.convert import frames, messages, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.stamps import sim_header
-from airsim_mapper.geometry import OriginError, compose, parse_origin
 
 CAMERA_POSE_KEY = "camera_pose"
 

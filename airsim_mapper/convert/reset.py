@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from airsim_mapper.common.geometry import OriginError, parse_origin
 from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.geometry import OriginError, parse_origin
 
 POSE_FRAME_ID = "DEFAULT_ID"
 

@@ -18,6 +18,8 @@ from typing import Any
 
 from geometry_msgs.msg import TransformStamped
 
+from airsim_mapper.common.geometry import q_conjugate, q_mul, q_rotate
+from airsim_mapper.common.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
@@ -29,8 +31,6 @@ from airsim_mapper.engine.replays import LatchedReplays
 from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
-from airsim_mapper.geometry import q_conjugate, q_mul, q_rotate
-from airsim_mapper.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.mapping.model import BridgeSpec
 
 log = ros_logger("airsim_mapper.bridge")

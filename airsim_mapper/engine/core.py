@@ -19,6 +19,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from airsim_mapper.common.logs import RateLimitedLog, ros_logger
 from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, BridgeParts, SimToRos
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
@@ -32,13 +33,12 @@ from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.engine.status import StatusPublisher
 from airsim_mapper.engine.supervisor import Supervisor
-from airsim_mapper.logs import RateLimitedLog, ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff, bridge_diff
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.names import ros_namespace
 from airsim_mapper.mapping.report import format_table
-from airsim_mapper.scene import Scene, read_scene
+from airsim_mapper.mapping.scene import Scene, read_scene
 
 log = ros_logger("airsim_mapper.engine")
 bridge_log = ros_logger("airsim_mapper.bridge")  # sim-time warnings, as the bridges' own

@@ -8,9 +8,9 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.convert import catalog
 from airsim_mapper.engine.bridges import Bridge, SimToRos
-from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.diagnostics")
 OK, WARN, ERROR = 0, 1, 2

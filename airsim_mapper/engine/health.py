@@ -77,7 +77,7 @@ def unreachable_reason(address: str, ports: tuple[int, ...], cause: BaseExceptio
 def closed_ports(address: str, ports: tuple[int, ...]) -> str:
     """Says "nothing listens on port P" of the ports at `address` that refuse a TCP connection; "" if none
     does."""
-    from airsim_mapper.ports import accepts_connections
+    from airsim_mapper.common.ports import accepts_connections
 
     closed = [str(port) for port in ports if not accepts_connections(address, port, PORT_CHECK_S)]
     return f"nothing listens on port {' or '.join(closed)}" if closed else ""

@@ -14,8 +14,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import ros_logger
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.mapping.diff import BridgeDiff
 from airsim_mapper.mapping.model import MappingDoc
 

@@ -10,7 +10,7 @@ from typing import Any
 
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.validated_world import load_validated_world
-from airsim_mapper.scene import Scene
+from airsim_mapper.mapping.scene import Scene
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The bridge's process settings: the shared thread tuning, prompt rospy publishing, a frozen heap.
 
-`airsim_mapper.tuning` gives one BLAS thread and a 0.5 ms GIL switch interval. On top, the bridge uses
+`airsim_mapper.common.tuning` gives one BLAS thread and a 0.5 ms GIL switch interval. On top, the bridge uses
 `PromptQueuedConnection` (rospy_internals.py): rospy's queued connection, which here sends on the
 publishing thread when the socket takes the message at once, instead of waking a writer thread and
 yielding the GIL on every publish. `freeze_heap` keeps the objects of a running scene out of full
@@ -15,8 +15,8 @@ from __future__ import annotations
 import gc
 import time
 
+from airsim_mapper.common.tuning import tune_threads
 from airsim_mapper.engine.rospy_internals import publish_promptly, watch_connections_without_a_file
-from airsim_mapper.tuning import tune_threads
 
 
 def tune_process() -> None:

@@ -22,8 +22,8 @@ import genpy
 from rospy.core import is_shutdown
 from rospy.exceptions import ROSSerializationException
 
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.convert.buffer_data import LENGTH, Part
-from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.publish")
 

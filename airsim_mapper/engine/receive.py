@@ -11,6 +11,8 @@ import threading
 import time
 from typing import Any
 
+from airsim_mapper.common.logs import ros_logger
+from airsim_mapper.common.nng_wait import MessageWait
 from airsim_mapper.engine.client_internals import (
     FRAME_READ,
     can_replace_frame_read,
@@ -18,8 +20,6 @@ from airsim_mapper.engine.client_internals import (
     replace_frame_read,
 )
 from airsim_mapper.engine.fast_frames import Buffer, decode_map
-from airsim_mapper.logs import ros_logger
-from airsim_mapper.nng_wait import MessageWait
 
 __all__ = [
     "FrameWait",

@@ -16,8 +16,8 @@ import xmlrpc.client
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.engine.errors import EngineError
-from airsim_mapper.logs import ros_logger
 
 log = ros_logger("airsim_mapper.master")
 POLL_PERIOD_S = 1.0

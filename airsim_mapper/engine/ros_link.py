@@ -12,10 +12,10 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
+from airsim_mapper.common.logs import shorten
+from airsim_mapper.common.ros_types import generated_kind
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.rospy_internals import widen_accept_backlog
-from airsim_mapper.logs import shorten
-from airsim_mapper.ros_types import generated_kind
 
 CLEAR_AGAIN_S = 1.0  # tf's buffer is cleared once more this long after a jump back in time
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
@@ -254,7 +254,7 @@ def moved_pose(pose_stamped: Any, transform: TransformStamped) -> Any:
     (not normalised), so a zero, non-unit or non-finite goal is still refused by the converter's checks."""
     from geometry_msgs.msg import PoseStamped
 
-    from airsim_mapper.geometry import q_mul, q_normalized, q_rotate
+    from airsim_mapper.common.geometry import q_mul, q_normalized, q_rotate
 
     t, r = transform.transform.translation, transform.transform.rotation
     rotation = q_normalized((r.w, r.x, r.y, r.z))

@@ -8,6 +8,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.errors import ConversionError
@@ -15,7 +16,6 @@ from airsim_mapper.engine.bridges import Bridge, BridgeParts, _accepted
 from airsim_mapper.engine.replays import LatchedReplays, connection_header
 from airsim_mapper.engine.ros_link import FrameUnknown
 from airsim_mapper.engine.sim_link import SimLinkError
-from airsim_mapper.logs import ros_logger
 from airsim_mapper.mapping.model import BridgeSpec
 
 __all__ = ["RosService", "RosToSim"]

@@ -10,9 +10,9 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.engine.errors import EngineError
-from airsim_mapper.errors import ConfigError
-from airsim_mapper.logs import RateLimitedLog, ros_logger, shorten
 
 log = ros_logger("airsim_mapper.engine")
 MAX_QUEUED_SCENES = 8  # load_scene requests waiting for the scene-loader thread

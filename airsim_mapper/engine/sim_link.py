@@ -31,6 +31,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from airsim_mapper.common.logs import RateLimitedLog, ros_logger
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.fast_frames import Buffer, parse_frame_header
 from airsim_mapper.engine.health import answered_within
@@ -44,7 +45,6 @@ from airsim_mapper.engine.receive import (
     unknown_topic,
     unpack_message,
 )
-from airsim_mapper.logs import RateLimitedLog, ros_logger
 
 log = ros_logger("airsim_mapper.sim")
 

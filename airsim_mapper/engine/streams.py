@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from airsim_mapper.logs import ros_logger
+from airsim_mapper.common.logs import ros_logger
 
 log = ros_logger("airsim_mapper.streams")
 

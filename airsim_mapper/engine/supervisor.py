@@ -24,6 +24,7 @@ import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
+from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.engine.errors import EngineError
 from airsim_mapper.engine.health import (
     LOST,
@@ -37,8 +38,7 @@ from airsim_mapper.engine.health import (
 from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.sim_link import SimLink, close_client
 from airsim_mapper.engine.status import CONNECTED, STALE, STOPPED, StatusPublisher
-from airsim_mapper.logs import ros_logger
-from airsim_mapper.scene import Scene
+from airsim_mapper.mapping.scene import Scene
 
 log = ros_logger("airsim_mapper.engine")
 WATCHDOG_PERIOD_S = 0.05  # the shortest wait between two checks

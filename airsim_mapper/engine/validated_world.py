@@ -7,7 +7,7 @@ import functools
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.scene import Scene
+from airsim_mapper.mapping.scene import Scene
 
 __all__ = ["load_validated_world", "validated_world_class"]
 

@@ -2,7 +2,8 @@
 
 Its face (`__all__`, the modules the layers above import): `loader`, `expand`, `pipeline` (both in one
 call), `model` (MappingDoc, BridgeSpec), `errors`, `diff`, `report`, `match`, `names` and `extends` (what the
-command line shows of a mapping), `reserved` (the names the node owns, its status topic's among them).
+command line shows of a mapping), `reserved` (the names the node owns, its status topic's among them),
+`scene` (the scene configuration as the bridge reads it).
 Everything else is the mapping layer's own.
 """
 
@@ -20,4 +21,5 @@ __all__ = [
     "pipeline",
     "report",
     "reserved",
+    "scene",
 ]

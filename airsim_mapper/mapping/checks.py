@@ -2,7 +2,7 @@
 
 - the converter exists (with a did-you-mean) and fits the rule's direction and ROS type;
 - the ROS type is a genpy-generated message or service of a ROS message package, and imports (the leaf
-  `airsim_mapper.ros_types` decides: a mapping never makes Python import an arbitrary module);
+  `airsim_mapper.common.ros_types` decides: a mapping never makes Python import an arbitrary module);
 - the sides a converter needs are present; a rule without a ROS name broadcasts tf;
 - templates are well formed and use only the variables of the rule's domain;
 - ROS names the templates generate are legal; no two rules produce the same ROS name; rule names are unique.
@@ -14,6 +14,7 @@ import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
+from airsim_mapper.common.ros_types import ros_type_kind, ros_type_problem
 from airsim_mapper.convert import catalog
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import Problem
@@ -22,7 +23,6 @@ from airsim_mapper.mapping.model import DOMAIN_VARIABLES, ROS_TO_SIM, SIM_TO_ROS
 from airsim_mapper.mapping.names import did_you_mean, ros_name_problem
 from airsim_mapper.mapping.origins import located, place_text
 from airsim_mapper.mapping.yamlmarks import Marks
-from airsim_mapper.ros_types import ros_type_kind, ros_type_problem
 
 SAMPLE_VALUE = "x1"  # stands for every template variable when checking generated names statically
 IMAGE_BOUNDS = ("max_pixels", "max_bytes")  # what a converter marked max_pixels in the catalogue takes

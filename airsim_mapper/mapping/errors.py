@@ -1,11 +1,11 @@
 """The mapping layer's errors: every problem found in a mapping, each located as FILE:LINE:COL.
 
-`Problem` and `ConfigError` live in the leaf `airsim_mapper.errors` (scene.py, below this layer, raises
+`Problem` and `ConfigError` live in the leaf `airsim_mapper.common.errors` (scene.py, below this layer, raises
 ConfigErrors too); they are re-exported here for the mapping modules."""
 
 from __future__ import annotations
 
-from airsim_mapper.errors import ConfigError, Problem
+from airsim_mapper.common.errors import ConfigError, Problem
 
 __all__ = ["ConfigError", "MappingError", "Problem"]
 

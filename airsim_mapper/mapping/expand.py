@@ -24,8 +24,8 @@ from collections.abc import Iterator, Mapping
 from types import MappingProxyType
 from typing import Any
 
+from airsim_mapper.common.image_types import FLOAT_IMAGE_TYPES, SIM_IMAGE_LEAVES
 from airsim_mapper.convert import catalog
-from airsim_mapper.image_types import FLOAT_IMAGE_TYPES, SIM_IMAGE_LEAVES
 from airsim_mapper.mapping import template
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.match import matches
@@ -33,7 +33,7 @@ from airsim_mapper.mapping.model import BridgeSpec, MappingDoc, Rule, TfSpec
 from airsim_mapper.mapping.names import resolve_name, ros_name_problem
 from airsim_mapper.mapping.origins import place_text
 from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem
-from airsim_mapper.scene import Scene
+from airsim_mapper.mapping.scene import Scene
 
 Element = tuple[str, dict[str, str], dict[str, Any]]  # (name key, variables, source)
 

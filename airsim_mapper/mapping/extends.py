@@ -22,13 +22,13 @@ import functools
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.files import MAX_CONFIG_BYTES, ConfigFileError, read_config_text
-from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
+from airsim_mapper.common.files import MAX_CONFIG_BYTES, ConfigFileError, read_config_text
+from airsim_mapper.common.image_types import DOCUMENTED_IMAGE_TYPES
+from airsim_mapper.common.resources import MAPPING_SUFFIX, MAPPINGS_DIR, shipped_mappings
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.names import did_you_mean
 from airsim_mapper.mapping.origins import KeyPath, Origins, Table, located
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
-from airsim_mapper.resources import MAPPING_SUFFIX, MAPPINGS_DIR, shipped_mappings
 
 FULL_RULE_KEYS = ("for_each", "direction", "converter")  # an entry with all of them is a whole rule
 MERGED_MAPS = ("image_types", "variables", "defaults")

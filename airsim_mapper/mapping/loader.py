@@ -11,8 +11,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from airsim_mapper.files import ConfigFileError, read_config_text
-from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
+from airsim_mapper.common.files import ConfigFileError, read_config_text
+from airsim_mapper.common.image_types import DOCUMENTED_IMAGE_TYPES
+from airsim_mapper.common.resources import mapping_path
 from airsim_mapper.mapping.checks import check_rules
 from airsim_mapper.mapping.errors import MappingError, Problem
 from airsim_mapper.mapping.extends import is_bare_name, resolve, shipped_hint
@@ -31,7 +32,6 @@ from airsim_mapper.mapping.reserved import literal_problem
 from airsim_mapper.mapping.schema import schema_problems
 from airsim_mapper.mapping.variables import apply_variables
 from airsim_mapper.mapping.yamlmarks import YamlLimits, load_marked
-from airsim_mapper.resources import mapping_path
 
 DEFAULT_IMAGE_TYPES: dict[int, str] = dict(DOCUMENTED_IMAGE_TYPES)
 OPTION_KEYS = tuple(field.name for field in fields(Options) if field.name != "limits")

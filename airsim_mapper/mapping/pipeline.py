@@ -15,7 +15,7 @@ from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import BridgeSpec, MappingDoc
 from airsim_mapper.mapping.names import resolve_namespace
-from airsim_mapper.scene import Scene, read_scene
+from airsim_mapper.mapping.scene import Scene, read_scene
 
 __all__ = ["Prepared", "load_and_expand", "prepare"]
 

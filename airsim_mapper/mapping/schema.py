@@ -9,11 +9,11 @@ from typing import Any
 
 import jsonschema
 
+from airsim_mapper.common.resources import SCHEMA_PATH
 from airsim_mapper.mapping.errors import Problem
 from airsim_mapper.mapping.names import did_you_mean
 from airsim_mapper.mapping.origins import local_path, located
 from airsim_mapper.mapping.yamlmarks import Marks
-from airsim_mapper.resources import SCHEMA_PATH
 
 
 @cache

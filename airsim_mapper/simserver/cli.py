@@ -10,11 +10,11 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT, port
+from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT, port
+from airsim_mapper.common.tuning import tune_threads
 from airsim_mapper.simserver.render import rendering
 from airsim_mapper.simserver.render.render_worker import RENDER_NICE
 from airsim_mapper.simserver.server import ServerOptions, SimServer
-from airsim_mapper.tuning import tune_threads
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:

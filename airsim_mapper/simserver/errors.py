@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.common.errors import AirsimMapperError
 
 __all__ = ["SimServerError"]
 

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
+from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.simserver.render.render_worker import RENDER_NICE, RenderWorker, RenderWorkerError
 from airsim_mapper.simserver.scene.config import SceneSpec, SceneSpecError, default_scene, parse_scene
 from airsim_mapper.simserver.scene.objects import LiveWorld

@@ -11,7 +11,7 @@ import pytest
 from bridgeharness import Stack
 from harness import ROOT, wait_until
 
-from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.common.geometry import quat_to_matrix
 
 ROBOT = "/airsim_node/Drone1"
 MAPPING = ROOT / "mappings" / "enu.yaml"

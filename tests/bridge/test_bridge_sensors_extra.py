@@ -92,7 +92,7 @@ def test_distance_sensor_ranges_to_the_ground_along_its_downward_x_axis(rig: Sta
     tf2_ros.TransformListener(buffer)
     tf = buffer.lookup_transform("map", msg.header.frame_id, rospy.Time(0), rospy.Duration(10)).transform
     r = tf.rotation
-    from airsim_mapper.geometry import quat_to_matrix
+    from airsim_mapper.common.geometry import quat_to_matrix
 
     beam = quat_to_matrix(np.array([r.w, r.x, r.y, r.z]))[:, 0]
     assert beam == pytest.approx([0.0, 0.0, 1.0], abs=1e-6)  # NED down

@@ -11,8 +11,8 @@ import pytest
 from harness import ROOT, SIM_CONFIG
 
 from airsim_mapper.cli.node import SETTINGS, SettingError, given_settings, parse_args, resolve_settings
+from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.mapping.names import resolve_namespace
-from airsim_mapper.ports import SERVICES_PORT, TOPICS_PORT
 
 LAUNCH = ROOT / "launch"
 # launch defaults that differ from the node's on purpose: roslaunch finds the package's own sim_config

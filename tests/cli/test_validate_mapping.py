@@ -10,9 +10,9 @@ from harness import EXAMPLE_CONFIG, ROOT, SIM_CONFIG, VENV_BIN
 from simconfigs import both_configs
 
 from airsim_mapper.cli.validate import format_table, load_and_expand, main
-from airsim_mapper.errors import ConfigError
+from airsim_mapper.common.errors import ConfigError
 from airsim_mapper.mapping.errors import MappingError
-from airsim_mapper.scene import SceneConfigError
+from airsim_mapper.mapping.scene import SceneConfigError
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
 # bridges for scene_drone_sensors.jsonc: the project's sensor drone also has radar1 (detections, tracks, tf)

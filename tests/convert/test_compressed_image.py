@@ -100,7 +100,7 @@ def test_the_documented_rule_publishes_the_png_and_counts_raw_pixels_as_bridge_e
     from airsim_mapper.engine.runners import build
     from airsim_mapper.mapping.expand import expand
     from airsim_mapper.mapping.loader import load_mapping_text
-    from airsim_mapper.scene import read_scene
+    from airsim_mapper.mapping.scene import read_scene
 
     text = re.search(r"```yaml\n(.*?)```", DOC.read_text(encoding="utf-8"), re.S).group(1)
     mapping = load_mapping_text(text, str(SIM_CONFIG / "compressed.yaml"))

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from airsim_mapper.common.geometry import quat_from_rpy, quat_to_matrix, rotate, rpy_from_quat
 from airsim_mapper.convert import frames
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rotate, rpy_from_quat
 
 finite = st.floats(-1e3, 1e3, allow_nan=False)
 angles = st.floats(-math.pi, math.pi, allow_nan=False)

@@ -6,10 +6,10 @@ import math
 
 import pytest
 
+from airsim_mapper.common.geometry import quat_from_rpy
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.odometry import odometry, rotation_vector
-from airsim_mapper.geometry import quat_from_rpy
 
 
 def sim_pose(t_s: float, position, yaw: float = 0.0):

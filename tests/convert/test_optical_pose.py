@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from airsim_mapper.common.geometry import quat_from_rpy, quat_to_matrix
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.convert.pose import camera_optical_pose, camera_pose
-from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
 
 
 def robot_pose(position=(1.0, 2.0, -4.0), q=(1.0, 0.0, 0.0, 0.0)):

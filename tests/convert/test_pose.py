@@ -9,6 +9,7 @@ import pytest
 import rospy
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 
+from airsim_mapper.common.geometry import quat_from_rpy, quat_to_matrix, rpy_from_quat
 from airsim_mapper.convert.command import camera_desired_pose
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
@@ -20,7 +21,6 @@ from airsim_mapper.convert.pose import (
     robot_pose,
     sensor_pose,
 )
-from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rpy_from_quat
 
 H = math.sqrt(0.5)
 

@@ -117,7 +117,7 @@ def test_shutdown_stops_every_bridge_and_says_so():
 def test_a_scene_read_and_expanded_at_start_up_is_loaded_without_reading_or_expanding_again(rig, monkeypatch):
     from airsim_mapper.engine import core as engine_module
     from airsim_mapper.mapping.expand import expand
-    from airsim_mapper.scene import read_scene
+    from airsim_mapper.mapping.scene import read_scene
 
     scene = read_scene(SIM_CONFIG, SCENE)
     specs = expand(rig.engine.mapping, scene, "node", "")

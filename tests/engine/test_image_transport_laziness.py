@@ -16,7 +16,7 @@ from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.runners import build
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 CAMERA = "Drone1/DownCamera/scene_camera"
 SIM = "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera/scene_camera"

@@ -10,16 +10,16 @@ from fakes import FakeRos, FakeSimLink
 from geometry_msgs.msg import PoseStamped
 from harness import SIM_CONFIG
 
+from airsim_mapper.common.geometry import q_mul, q_rotate
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.pose import camera_pose_key
 from airsim_mapper.engine.bridges import BridgeParts, MountTransform, SimToRos
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.runners import build
-from airsim_mapper.geometry import q_mul, q_rotate
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 MOUNT_RULES = ("camera_tf", "camera_optical_tf", "lidar_tf", "radar_tf", "distance_tf")
 

@@ -13,8 +13,8 @@ import time
 import pytest
 from harness import wait_until
 
+from airsim_mapper.common.tuning import SWITCH_INTERVAL_S
 from airsim_mapper.engine.rospy_internals import PromptQueuedConnection
-from airsim_mapper.tuning import SWITCH_INTERVAL_S
 
 
 class FakeTransport:
@@ -272,7 +272,7 @@ def test_a_broken_socket_surfaces_on_the_next_publish(pair) -> None:
 
 PROBE = (
     "import sys, rospy.topics;"
-    "from airsim_mapper.tuning import blas_threads;"
+    "from airsim_mapper.common.tuning import blas_threads;"
     "from airsim_mapper.engine.process_tuning import tune_process;"
     "tune_process();"
     "print(sys.getswitchinterval(), rospy.topics.QueuedConnection.__name__, *blas_threads())"
@@ -343,10 +343,10 @@ def test_a_frozen_heap_is_skipped_by_full_collections_and_thawing_frees_old_cycl
 
 ENGINE_PROBE = """
 import sys, types, rospy.topics
-from airsim_mapper.tuning import blas_threads
+from airsim_mapper.common.tuning import blas_threads
 from airsim_mapper.engine import Engine, NodeNames, SimAccess
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.resources import DEFAULT_MAPPING
+from airsim_mapper.common.resources import DEFAULT_MAPPING
 client = types.SimpleNamespace(socket_topics=None, socket_services=None, subs={}, topics={}, state=True)
 before = blas_threads()
 names, sim = NodeNames("probe"), SimAccess("sim_config")
@@ -371,7 +371,7 @@ def test_only_an_engine_asked_to_tune_changes_the_process() -> None:
 
 @pytest.mark.live
 def test_keep_frame_buffers_fixes_glibcs_thresholds_unless_tuning_is_off() -> None:
-    probe = "from airsim_mapper.tuning import keep_frame_buffers; print(keep_frame_buffers())"
+    probe = "from airsim_mapper.common.tuning import keep_frame_buffers; print(keep_frame_buffers())"
     run = {"capture_output": True, "text": True, "check": True}
     assert subprocess.run([sys.executable, "-c", probe], **run).stdout.split() == ["True"]
     env = {**os.environ, "AIRSIM_MAPPER_NO_TUNING": "1"}

@@ -21,7 +21,7 @@ from airsim_mapper.engine.ros_to_sim import RosService, RosToSim
 from airsim_mapper.engine.runners import build
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ from simconfigs import EXAMPLE_SCENES, both_configs, scenes_of
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import TfSpec
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
 LOAD_SCENE = "/ProjectAirSim/node/projectairsim/load_scene"

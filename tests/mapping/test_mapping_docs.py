@@ -9,7 +9,7 @@ from harness import ROOT, SIM_CONFIG
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 DOC = (ROOT / "docs" / "mapping-language.md").read_text()
 EXAMPLES = dict(re.findall(r"<!-- example: (\w+) -->\n```yaml\n(.*?)```", DOC, re.S))

@@ -11,7 +11,7 @@ from simconfigs import EXAMPLE_SCENES, scenes_of
 
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
-from airsim_mapper.scene import Scene, read_scene
+from airsim_mapper.mapping.scene import Scene, read_scene
 
 DEFAULT = ROOT / "mappings" / "default.yaml"
 ENU = ROOT / "mappings" / "enu.yaml"

@@ -8,7 +8,7 @@ from scene_builders import camera, capture
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 HEADER = "version: 1\nrules:\n"
 
@@ -182,7 +182,7 @@ def test_a_namespace_prefixes_every_topic_and_frame_of_the_default_mapping():
 
     from airsim_mapper.mapping.expand import expand, namespace_variables
     from airsim_mapper.mapping.loader import load_mapping
-    from airsim_mapper.scene import read_scene
+    from airsim_mapper.mapping.scene import read_scene
 
     assert namespace_variables("") == {"namespace": "", "frame_prefix": ""}
     assert namespace_variables("/sim2/") == {"namespace": "/sim2", "frame_prefix": "sim2/"}
@@ -210,7 +210,7 @@ def test_template_strings_in_params_are_rendered_per_element_and_other_values_ar
 
 
 def test_without_a_scene_only_the_node_rules_expand():
-    from airsim_mapper.resources import DEFAULT_MAPPING
+    from airsim_mapper.common.resources import DEFAULT_MAPPING
 
     mapping = load_mapping(DEFAULT_MAPPING)
     bridges = expand(mapping, None, "bridge", "sim1")

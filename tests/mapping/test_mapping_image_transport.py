@@ -9,7 +9,7 @@ from harness import ROOT
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 RULE = """\
 version: 1

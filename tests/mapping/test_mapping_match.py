@@ -10,7 +10,7 @@ from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.expand import expand, selected
 from airsim_mapper.mapping.loader import load_mapping_text
 from airsim_mapper.mapping.match import Selector, matches, pattern_problem
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 IMAGES = """version: 1
 rules:

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.loader import load_mapping_text
 from airsim_mapper.mapping.model import MappingDoc
-from airsim_mapper.scene import Scene, SceneConfigError, read_scene
+from airsim_mapper.mapping.scene import Scene, SceneConfigError, read_scene
 
 WORDS = [
     "version",

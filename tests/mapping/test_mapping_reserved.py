@@ -8,12 +8,12 @@ from harness import SIM_CONFIG
 from scene_builders import pose_rule
 
 from airsim_mapper.cli.validate import main
+from airsim_mapper.common.resources import DEFAULT_MAPPING
 from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping, load_mapping_text
 from airsim_mapper.mapping.reserved import GLOBAL
-from airsim_mapper.resources import DEFAULT_MAPPING
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 
 EXTENDING = "version: 1\nextends: default\n"
 

@@ -10,7 +10,7 @@ from harness import EXAMPLE_CONFIG, SIM_CONFIG
 from scene_builders import camera, capture
 from simconfigs import both_configs
 
-from airsim_mapper.scene import SceneConfigError, read_scene, scene_from_config
+from airsim_mapper.mapping.scene import SceneConfigError, read_scene, scene_from_config
 
 # two different drones, Drone1 the plain one with a disabled GPS: file, scene id, Drone2's origin
 TWO_DRONE_SCENES = {
@@ -180,7 +180,7 @@ def test_a_fifo_scene_or_robot_config_is_refused_at_once_naming_the_file(tmp_pat
 
     from harness import SIM_CONFIG
 
-    from airsim_mapper.scene import SceneConfigError, read_scene
+    from airsim_mapper.mapping.scene import SceneConfigError, read_scene
 
     root = tmp_path / "configs"
     shutil.copytree(SIM_CONFIG, root)

@@ -19,7 +19,7 @@ from airsim_mapper.engine.streams import Stream
 from airsim_mapper.mapping.expand import expand
 from airsim_mapper.mapping.loader import load_mapping
 from airsim_mapper.mapping.model import SIM_TO_ROS
-from airsim_mapper.scene import read_scene
+from airsim_mapper.mapping.scene import read_scene
 from airsim_mapper.wrapper import DEFAULT_MAPPING
 from reliability.relkit import PROJECT_SIM_CONFIG, SCENE
 

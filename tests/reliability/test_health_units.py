@@ -252,7 +252,7 @@ def test_a_mapping_can_only_name_converters_from_the_catalogue():
 def test_a_log_budget_logs_so_many_per_period_then_says_how_many_it_held_back(caplog, monkeypatch):
     import logging
 
-    from airsim_mapper import logs
+    from airsim_mapper.common import logs
 
     now = [100.0]
     monkeypatch.setattr(logs.time, "monotonic", lambda: now[0])

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from airsim_mapper.geometry import quat_from_rpy
+from airsim_mapper.common.geometry import quat_from_rpy
 from airsim_mapper.simserver.render.annotations import AnnotationError, AnnotationSettings, annotate
 from airsim_mapper.simserver.render.camera_model import camera_info_message
 from airsim_mapper.simserver.scene.config import SceneSpecError, parse_scene

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
-from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix, rotate
+from airsim_mapper.common.geometry import quat_from_rpy, quat_to_matrix, rotate
 from airsim_mapper.simserver.render import gl_renderer, rendering
 from airsim_mapper.simserver.render.camera_model import (
     CameraError,

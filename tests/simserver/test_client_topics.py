@@ -14,7 +14,7 @@ from projectairsim.types import Pose
 from projectairsim.utils import unpack_image
 from simconfigs import EXAMPLES, PROJECT, both_configs, config_dir
 
-from airsim_mapper.geometry import quat_from_rpy
+from airsim_mapper.common.geometry import quat_from_rpy
 from simserver.clientkit import load_world, subscribe
 
 CAMERA = "/Sim/SceneDroneSensors/robots/Drone1/sensors/DownCamera"

@@ -23,7 +23,7 @@ import threading
 import numpy as np
 import pytest
 
-from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
+from airsim_mapper.common.geometry import quat_from_rpy, quat_to_matrix
 from airsim_mapper.simserver.render import camera_model, gl_renderer, raycast_renderer, rendering
 from airsim_mapper.simserver.render.camera_model import RenderRequest
 from airsim_mapper.simserver.world.world import World

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
-from airsim_mapper.geometry import quat_from_rpy, quat_to_matrix
+from airsim_mapper.common.geometry import quat_from_rpy, quat_to_matrix
 from airsim_mapper.simserver.sensors.lidar_model import LidarError, LidarModel
 from airsim_mapper.simserver.sensors.sensor_streams import LIDAR_MIN_SEGMENT_NS
 from airsim_mapper.simserver.world.world import World

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from airsim_mapper.geometry import IDENTITY_Q, quat_from_rpy, yaw_of
+from airsim_mapper.common.geometry import IDENTITY_Q, quat_from_rpy, yaw_of
 from airsim_mapper.simserver.motion.motion import DRAG_TIME_S, Body, Hold, Kinematic, wrap_angle
 from airsim_mapper.simserver.motion.motion_commands import (
     Land,

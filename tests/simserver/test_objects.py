@@ -9,7 +9,7 @@ import struct
 import numpy as np
 import pytest
 
-from airsim_mapper.geometry import quat_from_rpy
+from airsim_mapper.common.geometry import quat_from_rpy
 from airsim_mapper.simserver.scene.objects import LiveWorld, SceneObjects
 from airsim_mapper.simserver.wire.services import ServiceError
 from airsim_mapper.simserver.world import gltf

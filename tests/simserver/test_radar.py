@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from simconfigs import EXAMPLES, PROJECT, both_configs, robot_sensors
 
-from airsim_mapper.geometry import quat_from_rpy
+from airsim_mapper.common.geometry import quat_from_rpy
 from airsim_mapper.simserver.sensors.radar_model import RadarError, RadarModel
 from airsim_mapper.simserver.world.world import World
 from airsim_mapper.simserver.world.world_file import load_world

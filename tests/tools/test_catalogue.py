@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import json
 
+from airsim_mapper.common.resources import SCHEMA_PATH
 from airsim_mapper.convert.catalog import CONVERTERS
-from airsim_mapper.resources import SCHEMA_PATH
 from tools import catalogue
 
 

@@ -176,8 +176,8 @@ def test_a_bag_of_many_topics_starts_every_topic_at_once(launcher: Rig) -> None:
 def test_rosmsg_and_rossrv_show_every_type_the_bridge_publishes_or_serves(launcher: Rig) -> None:
     """Each type of the shipped mappings' rules and of the node's own topics, through Debian's rosmsg or
     rossrv: they need a package's msg/ (or srv/) and its package.xml, from separate Debian packages."""
+    from airsim_mapper.common.ros_types import ros_type_kind
     from airsim_mapper.mapping.loader import load_mapping
-    from airsim_mapper.ros_types import ros_type_kind
 
     own = {"diagnostic_msgs/DiagnosticArray", "tf2_msgs/TFMessage", "rosgraph_msgs/Clock", "std_msgs/String"}
     ros_types = own | {r.ros_type for m in ("default", "enu") for r in load_mapping(m).rules if r.ros_type}

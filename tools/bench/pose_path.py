@@ -61,7 +61,7 @@ def run(mapping: str, messages: int) -> dict[str, float]:
     from airsim_mapper.engine.runners import build
     from airsim_mapper.mapping.expand import expand
     from airsim_mapper.mapping.loader import load_mapping
-    from airsim_mapper.scene import read_scene
+    from airsim_mapper.mapping.scene import read_scene
 
     folder = Path(tempfile.mkdtemp(prefix="pose_path_"))
     scene_file = scenes.write_scene(folder, "pose", 1, scenes.CameraSetup(320, 240, 0.1, (0,)))

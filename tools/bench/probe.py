@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper import tuning
+from airsim_mapper.common import tuning
 
 MALLOC_CHOICES = ("fixed", "glibc")  # the probe's malloc thresholds: as the bridge's, or glibc's adaptive
 DEFAULT_MALLOC, GLIBC_MALLOC = MALLOC_CHOICES

@@ -51,7 +51,7 @@ def measure(fn: Callable[[int], object], renders: int) -> dict[str, float]:
 
 def run(gl_renders: int = GL_RENDERS, raycast_renders: int = RAYCAST_RENDERS) -> dict[str, Any]:
     """{"gl": {case: figures}, "raycast": {case: figures}, "gl_renderer": description} (GL errors kept)."""
-    from airsim_mapper.tuning import limit_blas_threads
+    from airsim_mapper.common.tuning import limit_blas_threads
 
     limit_blas_threads(1)  # as in the render worker: the ray caster's products are small
     world = load_world()

@@ -22,7 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_from_rpy
+from airsim_mapper.common.geometry import quat_from_rpy
 from airsim_mapper.simserver.render.camera_model import RenderRequest
 from airsim_mapper.simserver.render.rendering import render
 from airsim_mapper.simserver.sensors.lidar_model import LidarModel

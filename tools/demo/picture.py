@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.image_types import DOCUMENTED_IMAGE_TYPES
+from airsim_mapper.common.image_types import DOCUMENTED_IMAGE_TYPES
 
 IMAGE_TYPES = tuple(DOCUMENTED_IMAGE_TYPES.values())  # the default mapping's <image_type> names
 

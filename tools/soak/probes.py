@@ -10,7 +10,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from airsim_mapper.tuning import SWITCH_INTERVAL_S
+from airsim_mapper.common.tuning import SWITCH_INTERVAL_S
 
 POSE_TOPIC = "/airsim_node/Drone1/actual_pose"
 WAKE_PERIOD_S = 0.005  # the wake probe's sleep

@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from airsim_mapper.tuning import SWITCH_INTERVAL_S
+from airsim_mapper.common.tuning import SWITCH_INTERVAL_S
 from tools.rig import ROOT, Rig, RigError, descendants
 from tools.soak import hosttune
 from tools.soak.cpu import CpuMark, command_name, cpu_mark, cpu_shares

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_from_rpy, quat_multiply, quat_normalize
+from airsim_mapper.common.geometry import quat_from_rpy, quat_multiply, quat_normalize
 
 LANDED_HEIGHT_M = 0.15
 MAX_WIND_MPS = 200.0  # wind speeds beyond this are refused (scene or SetWindVelocity)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_from_rpy, rotate, yaw_of
+from airsim_mapper.common.geometry import quat_from_rpy, rotate, yaw_of
 from airsim_mapper.simserver.motion.motion import Command, Kinematic, Motion, wrap_angle
 
 # Takeoff and landing follow Project AirSim's multirotor API (vehicle_apis/multirotor_api):

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.common.geometry import quat_to_matrix
 from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world.world import World, WorldObject
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.common.geometry import quat_to_matrix
 from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.render import camera_model, gl_shaders
 from airsim_mapper.simserver.render.camera_model import RenderedImage, RenderRequest

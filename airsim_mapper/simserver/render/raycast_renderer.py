@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_to_matrix
+from airsim_mapper.common.geometry import quat_to_matrix
 from airsim_mapper.simserver.render.camera_model import (
     DEPTH_PLANAR,
     DEPTH_TYPES,

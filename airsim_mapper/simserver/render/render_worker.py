@@ -278,7 +278,7 @@ def serve(conn: Connection, nice: int, buffer_fd: int) -> None:
 
 
 def main(argv: Sequence[str]) -> int:
-    from airsim_mapper.tuning import limit_blas_threads
+    from airsim_mapper.common.tuning import limit_blas_threads
 
     # a signal meant for the server (its group, when nice is 0) must not stop us first: the server finishes
     # its render and then closes our end

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from airsim_mapper.geometry import quat_from_rpy, quat_multiply
+from airsim_mapper.common.geometry import quat_from_rpy, quat_multiply
 from airsim_mapper.simserver.render import camera_model
 from airsim_mapper.simserver.robot.robot_params import finite, within_world
 from airsim_mapper.simserver.robot.robots import RobotRuntime

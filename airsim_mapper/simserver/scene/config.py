@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import IDENTITY_Q, OriginError, parse_origin
-from airsim_mapper.image_types import SIM_IMAGE_LEAVES
+from airsim_mapper.common.geometry import IDENTITY_Q, OriginError, parse_origin
+from airsim_mapper.common.image_types import SIM_IMAGE_LEAVES
 from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.motion.motion import DEFAULT_MASS_KG, MAX_WIND_MPS
 from airsim_mapper.simserver.render.annotations import AnnotationError, AnnotationSettings

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import quat_from_rpy, quat_multiply
+from airsim_mapper.common.geometry import quat_from_rpy, quat_multiply
 from airsim_mapper.simserver.wire import messages
 from airsim_mapper.simserver.wire.services import ServiceError
 

@@ -26,7 +26,14 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import IDENTITY_Q, quat_conjugate, quat_from_rpy, quat_multiply, rotate, yaw_of
+from airsim_mapper.common.geometry import (
+    IDENTITY_Q,
+    quat_conjugate,
+    quat_from_rpy,
+    quat_multiply,
+    rotate,
+    yaw_of,
+)
 from airsim_mapper.simserver.scene import voxels
 from airsim_mapper.simserver.scene.geo import DEFAULT_HOME, geo_to_ned
 from airsim_mapper.simserver.wire import messages

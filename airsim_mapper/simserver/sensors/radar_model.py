@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.geometry import parse_origin, quat_to_matrix
+from airsim_mapper.common.geometry import parse_origin, quat_to_matrix
 from airsim_mapper.simserver.errors import SimServerError
 from airsim_mapper.simserver.world.world import World
 

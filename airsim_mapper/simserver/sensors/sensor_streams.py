@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from airsim_mapper.geometry import compose, quat_from_rpy, rpy_from_quat
+from airsim_mapper.common.geometry import compose, quat_from_rpy, rpy_from_quat
 from airsim_mapper.simserver.motion.motion import Body, Kinematic
 from airsim_mapper.simserver.scene.config import SensorSpec
 from airsim_mapper.simserver.sensors import instrument_models, lidar_model, radar_model

@@ -21,7 +21,7 @@ from typing import Any
 
 import pynng
 
-from airsim_mapper.nng_wait import MessageWait
+from airsim_mapper.common.nng_wait import MessageWait
 from airsim_mapper.simserver.wire import protocol
 from airsim_mapper.simserver.wire.outbox import Outbox
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.common.errors import AirsimMapperError
 
 CONVENTIONS = ("frd", "flu")
 RETURN_FIELDS = ("range", "azimuth", "elevation", "doppler_velocity", "amplitude")
@@ -84,7 +84,7 @@ def scan_table(scan: Any) -> np.ndarray:
 def scan_markers(scan: Any, convention: str = "frd", style: MarkerStyle | None = None) -> Any:
     """A visualization_msgs/MarkerArray with one SPHERE_LIST marker of the scan's returns (returns with a
     non-finite range, azimuth or elevation are left out)."""
-    import rospy
+    import genpy
     from geometry_msgs.msg import Point
     from std_msgs.msg import ColorRGBA
     from visualization_msgs.msg import Marker, MarkerArray
@@ -102,7 +102,7 @@ def scan_markers(scan: Any, convention: str = "frd", style: MarkerStyle | None =
     marker.pose.orientation.w = 1.0
     marker.scale.x = marker.scale.y = marker.scale.z = style.diameter_m
     marker.color = ColorRGBA(*WEAK_RGBA)
-    marker.lifetime = rospy.Duration.from_sec(style.lifetime_s)
+    marker.lifetime = genpy.Duration.from_sec(style.lifetime_s)
     marker.points = [Point(*p) for p in xyz.tolist()]
     marker.colors = [ColorRGBA(*c) for c in amplitude_colors(table[:, 4]).tolist()]
     return MarkerArray(markers=[marker])

@@ -20,8 +20,8 @@ from functools import cache
 from pathlib import Path, PurePath
 from typing import Any
 
-from airsim_mapper.errors import ConfigError
-from airsim_mapper.files import ConfigFileError, read_config_text
+from airsim_mapper.common.errors import ConfigError
+from airsim_mapper.common.files import ConfigFileError, read_config_text
 
 _CLIENT_READS = threading.Lock()  # guards every patch of the client's module state (see _client_patched)
 SCENE_SCHEMA = "schema/scene_config_schema.jsonc"

@@ -16,7 +16,7 @@ import stat
 import threading
 from pathlib import Path
 
-from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.common.errors import AirsimMapperError
 
 MAX_CONFIG_BYTES = 16 * 1024 * 1024
 READ_TIMEOUT_S = 10.0

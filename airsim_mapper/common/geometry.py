@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.errors import AirsimMapperError
+from airsim_mapper.common.errors import AirsimMapperError
 
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 
