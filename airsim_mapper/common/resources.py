@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-PACKAGE_DIR = Path(__file__).resolve().parent
+PACKAGE_DIR = Path(__file__).resolve().parent.parent  # airsim_mapper/, this module being in common/
 MAPPINGS_DIR = PACKAGE_DIR / "mappings"
 SCHEMA_PATH = PACKAGE_DIR / "schemas" / "mapping.schema.json"
 DEFAULT_MAPPING = MAPPINGS_DIR / "default.yaml"
