@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from airsim_mapper.common.errors import AirsimMapperError
+from airsim_mapper.convert.errors import ConvertError
 
 CONVENTIONS = ("frd", "flu")
 RETURN_FIELDS = ("range", "azimuth", "elevation", "doppler_velocity", "amplitude")
@@ -29,7 +29,7 @@ WEAK_RGBA = (1.0, 0.9, 0.1, 1.0)  # yellow
 STRONG_RGBA = (1.0, 0.1, 0.1, 1.0)  # red
 
 
-class RadarMarkerError(AirsimMapperError, ValueError):
+class RadarMarkerError(ConvertError, ValueError):
     """A scan or an option cannot be turned into markers."""
 
 

@@ -20,15 +20,15 @@ from functools import cache
 from pathlib import Path, PurePath
 from typing import Any
 
-from airsim_mapper.common.errors import ConfigError
 from airsim_mapper.common.files import ConfigFileError, read_config_text
+from airsim_mapper.mapping.errors import MappingError
 
 _CLIENT_READS = threading.Lock()  # guards every patch of the client's module state (see _client_patched)
 SCENE_SCHEMA = "schema/scene_config_schema.jsonc"
 ROBOT_SCHEMA = "schema/robot_config_schema.jsonc"
 
 
-class SceneConfigError(ConfigError):
+class SceneConfigError(MappingError):
     """The scene or a robot config cannot be read, lies outside the config directory, or is invalid."""
 
 
