@@ -27,11 +27,10 @@ DURABILITY = ("volatile", "transient_local")
 HISTORY = ("keep_last", "keep_all")
 SETTINGS = ("reliability", "durability", "depth", "history")
 
-# What the node's own publishers get: /tf as tf2_ros's broadcaster (reliable, depth 100), /tf_static
-# latched; /clock as rclpy's time source subscribes to it.
+# What the node's own tf publishers get: /tf as tf2_ros's broadcaster (reliable, depth 100), /tf_static
+# as its static broadcaster (latched, depth 1).
 TF_QOS = Qos("reliable", "volatile", 100)
 TF_STATIC_QOS = PROFILES[catalog.TRANSIENT_LOCAL]
-CLOCK_QOS = PROFILES[catalog.SENSOR_DATA]
 
 
 def qos_of(raw: str | Mapping[str, Any]) -> Qos:
