@@ -19,6 +19,7 @@ NAMESPACE_MAX_LENGTH = TOPIC_MAX_LENGTH - 2
 NODE_NAME_MAX_LENGTH = 255
 SAMPLE_VALUE = "x1"  # stands for every template variable when a rule's names are checked without a scene
 _WORD = re.compile(r"[A-Za-z0-9_]")
+SUBSTITUTIONS = ("node", "ns", "namespace")  # what rcl's expansion puts in for {node}, {ns}, {namespace}
 
 
 def _at(name: str, index: int, why: str) -> str:
@@ -116,7 +117,7 @@ def expand_name(name: str, node_name: str, node_namespace: str = "") -> str:
     namespace; a relative name goes below the namespace."""
     namespace = node_namespace.rstrip("/")
     private = f"{namespace}/{node_name}"
-    values = {"node": node_name, "ns": namespace or "/", "namespace": namespace or "/"}
+    values = dict(zip(SUBSTITUTIONS, (node_name, namespace or "/", namespace or "/")))
     text = re.sub(r"\{(\w+)\}", lambda m: values.get(m.group(1), m.group(0)), name)
     if text.startswith("~"):
         text = private + text[1:]
@@ -124,11 +125,14 @@ def expand_name(name: str, node_name: str, node_namespace: str = "") -> str:
 
 
 def ros2_name_problem(name: str, node_name: str, node_namespace: str = "") -> str | None:
-    """Why ROS 2 refuses `name` for the node `node_name` in `node_namespace`: as written, or once
-    expanded; None when it takes it."""
+    """Why ROS 2 refuses `name` for the node `node_name` in `node_namespace`: as written, for a
+    substitution rcl does not know, or once expanded; None when it takes it."""
     why = topic_problem(name)
     if why is not None:
         return why
+    unknown = [found for found in re.findall(r"\{(\w+)\}", name) if found not in SUBSTITUTIONS]
+    if unknown:
+        return f"{{{unknown[0]}}} is not a substitution ROS 2 knows ({', '.join(SUBSTITUTIONS)})"
     full = expand_name(name, node_name, node_namespace)
     why = full_topic_problem(full)
     return None if why is None else f"its full name '{full}' is refused: {why}"
