@@ -175,6 +175,13 @@ def test_a_name_is_refused_when_its_expansion_is():
     assert ros2_name_problem("~/foo", "node", "/sim1") is None
 
 
+def test_a_substitution_rcl_does_not_know_is_refused():
+    assert ros2_name_problem("/{robot}/pose", "node") == (
+        "{robot} is not a substitution ROS 2 knows (node, ns, namespace)"
+    )
+    assert topic_problem("/{robot}/pose") is None  # as written, any word in braces is well formed
+
+
 @pytest.mark.parametrize("name", ["/cam/0image", "~foo", "/a/b/9", "x/" + "a" * TOPIC_MAX_LENGTH])
 def test_ros1_takes_names_that_ros2_refuses(name: str):
     assert ros_name_problem(name) is None
