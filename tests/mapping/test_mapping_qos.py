@@ -67,6 +67,10 @@ def test_the_profiles_have_rmws_settings():
     assert str(Qos("reliable", "volatile", 10, "keep_all")) == "reliable/volatile/all"
 
 
+def test_every_catalogue_entry_names_a_profile():
+    assert {info.qos for info in CONVERTERS.values()} <= set(QOS_PROFILES)
+
+
 def test_the_schema_lists_the_catalogues_profiles():
     qos = schema()["$defs"]["qos"]
     assert qos["then"]["enum"] == list(QOS_PROFILES)
