@@ -169,6 +169,7 @@ class FakeRos:
     refused: set[str] = field(default_factory=set)  # topics whose publisher fails, as rospy's may
     made: list[FakePublisher] = field(default_factory=list)  # every publisher ever made, in order
     tf_subscribed: bool = True  # /tf has a subscriber: transforms are built and sent
+    params: dict = field(default_factory=dict)  # ROS parameters, by full name
 
     def publisher(self, name: str, ros_type: str, *, queue_size: int, latch: bool = False, on_peers=None):
         message_class(ros_type)  # the type must exist, as rospy would require
@@ -189,6 +190,9 @@ class FakeRos:
 
     def now(self) -> genpy.Time:
         return genpy.Time(100, 0)
+
+    def param(self, name: str) -> Any:
+        return self.params.get(name)
 
     def tf_wanted(self) -> bool:
         return self.tf_subscribed

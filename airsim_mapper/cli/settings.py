@@ -110,12 +110,15 @@ def _sim_config_fallback(resolved: dict[str, Resolved]) -> dict[str, Resolved]:
 
 def unread_parameters(names: Iterable[str], node_name: str) -> list[str]:
     """What to say of the node's private parameters that no setting reads (`names`: the parameters on the
-    master; `node_name`: the node's full ROS name), so that a mistyped `<param>` is not passed over."""
+    master; `node_name`: the node's full ROS name), so that a mistyped `<param>` is not passed over. The
+    image_transport topics' own parameters (`<topic>/compressed/jpeg_quality`) are read by their bridges."""
+    from airsim_mapper.convert.transport_params import is_topic_parameter
     from airsim_mapper.mapping.names import did_you_mean
 
     prefix = node_name.rstrip("/") + "/"
     known = [setting.name for setting in SETTINGS]
-    unread = sorted({name[len(prefix) :].split("/")[0] for name in names if name.startswith(prefix)})
+    mine = [name for name in names if name.startswith(prefix) and not is_topic_parameter(name)]
+    unread = sorted({name[len(prefix) :].split("/")[0] for name in mine})
     said = []
     for key in (key for key in unread if key not in known):
         switch = key.replace("_", "-")

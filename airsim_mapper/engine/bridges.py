@@ -24,6 +24,7 @@ from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
 from airsim_mapper.convert.pose import camera_pose_key
+from airsim_mapper.convert.transport_params import overridden
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.publish import publish
@@ -87,13 +88,24 @@ def make_context(
         convention=spec.convention,
         stamp=spec.options.stamp,
         now=parts.ros.now,
-        params=spec.params,
+        params=topic_params(spec, parts),
         source=spec.source,
         variables=spec.variables,
         options=spec.options,
         mounts=parts.mounts,
         on_clamp=on_clamp,
     )
+
+
+def topic_params(spec: BridgeSpec, parts: BridgeParts) -> Any:
+    """The rule's params, with those an image_transport plugin reads from ROS parameters named after the
+    topic in their place (transport_params.py); read once, as the bridge is built."""
+    if spec.ros is None:
+        return spec.params
+    found = overridden(spec.converter, spec.ros, spec.params, parts.ros.param)
+    for refused in found.refused:
+        log.warning("%s: %s", spec.name, refused)
+    return found.params
 
 
 class Bridge:

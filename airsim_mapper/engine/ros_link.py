@@ -146,6 +146,10 @@ class RosLink:
     def now(self) -> Any:
         return rospy.Time.now()
 
+    def param(self, name: str) -> Any:
+        """The ROS parameter `name`'s value, None when it is not set."""
+        return rospy.get_param(name, None)
+
     def send_tf(self, transforms: list[TransformStamped]) -> None:
         self.tf.send(transforms)
 

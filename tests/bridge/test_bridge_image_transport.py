@@ -149,3 +149,35 @@ def test_format_png_is_the_raw_image_exactly(rig_factory, tmp_path):
     decoded = cv2.imdecode(np.frombuffer(compressed.data, np.uint8), cv2.IMREAD_UNCHANGED)
     pixels = np.frombuffer(raw.data, np.uint8).reshape(raw.height, raw.width, 3)
     np.testing.assert_array_equal(decoded, pixels)
+
+
+def test_the_topics_ros_parameters_override_the_mapping_as_the_plugins_read_them(rig: Stack, rig_factory):
+    """`<topic>/jpeg_quality` set before the node starts: a smaller JPEG than the default quality's; a
+    `png_level` out of its bounds warned by name and bound, and the mapping's value kept."""
+    import rospy
+    from sensor_msgs.msg import Image
+
+    low = f"/lowq{COLOUR}/compressed"
+    rospy.set_param(f"{low}/jpeg_quality", 5)
+    rospy.set_param(f"{low}/png_level", 42)
+    try:
+        stack = rig_factory()
+        node = stack.start_node(
+            "--scene",
+            "scene_drone_sensors.jsonc",
+            "--namespace",
+            "lowq",
+            node_name="lowq_bridge",
+            wait_for=f"/lowq{DEPTH}",
+        )
+        raw, small = same_stamp(f"/lowq{COLOUR}", Image, low)
+    finally:
+        rospy.delete_param(f"{low}/jpeg_quality")
+        rospy.delete_param(f"{low}/png_level")
+    _raw, default = same_stamp(COLOUR, Image, f"{COLOUR}/compressed")
+    decoded = cv2.imdecode(np.frombuffer(small.data, np.uint8), cv2.IMREAD_COLOR)
+    assert decoded.shape == (raw.height, raw.width, 3)
+    print(f"JPEG at quality 5: {len(small.data)} bytes, at the default 80: {len(default.data)}")
+    assert len(small.data) < 0.6 * len(default.data)
+    said = f"parameter {low}/png_level = 42 ignored: it must be an integer from 1 to 9; keeping"
+    wait_until(lambda: said in node.output(), 10, what="the warning of png_level")

@@ -193,6 +193,7 @@ def test_a_private_parameter_the_node_does_not_read_is_named_with_what_was_meant
         "/fleet/bridge/mapings",
         "/fleet/bridge/max_frame_mb",
         "/fleet/bridge/extra/nested",
+        "/fleet/bridge/Drone1/cam/scene_camera/image/compressed/jpeg_quality",  # its bridge reads it
         "/fleet/other/scene",  # another node's
         "/rosdistro",
     ]
