@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from tools import camera_probe
-from tools.bench import costs, host, renderers, sampling, scenes, tables, targets, transports
+from tools.bench import costs, encoders, host, renderers, sampling, scenes, tables, targets, transports
 from tools.bench.e2e import Bench, rotated
 from tools.bench.results import latency_rounds, quiet_round
 
@@ -193,6 +193,9 @@ def main(argv: list[str] | None = None) -> int:
         "costs": costs.run(),
     }
     print(tables.costs_table(results["costs"]), flush=True)
+    # the image_transport converters against the library's own encode of the same frame, in this run
+    results["encoders"] = encoders.converter_costs(repeat=5 if args.quick else 30)
+    print(encoders.converter_table(results["encoders"]), flush=True)
     results["renderers"] = renderers.run()
     print(renderers.table(results["renderers"]), flush=True)
     # the server's own camera path: all seven types of one 1280x720 camera, render worker to socket

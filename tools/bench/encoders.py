@@ -5,7 +5,8 @@ Run: .venv/bin/python -m tools.bench.encoders [--repeat N]
 
 Then the bridge's own converters on the same frames, as the simulator sends them (BGR, float16 depth): CPU
 per frame over the library's own encode of the same pixels in the same run, and the bytes on the wire per
-transport (the serialised ROS message: raw Image, compressed JPEG and PNG, compressedDepth).
+transport (the serialised ROS message: raw Image, compressed JPEG and PNG, compressedDepth). `make bench`
+runs this part too (`converter_costs`), and judges the JPEG converter's ratio.
 
 The colour frame is a rendered-looking scene (sky gradient, textured ground, boxes, sensor noise); the depth
 frame is a ground plane with boxes, 1 to 200 m, quantised as compressed_depth_image_transport does before
@@ -29,6 +30,9 @@ from airsim_mapper.convert.image_transport import encode_png, quantised_inverse_
 W, H = 1920, 1080
 JPEG_QUALITY = 80  # compressed_image_transport's default
 PNG_LEVEL = 1  # compressed_depth_image_transport's default
+# the transports' rows, as the converter rows name them
+RAW, RAW_DEPTH = "raw Image bgr8", "raw Image 32FC1"
+JPEG, PNG, COMPRESSED_DEPTH = "compressed jpeg", "compressed png", "compressedDepth"
 
 
 def colour_frame() -> np.ndarray:
@@ -124,48 +128,68 @@ def wire_bytes(message: object) -> int:
     return len(buffer.getvalue())
 
 
-def converter_rows(bgr: np.ndarray, depth: np.ndarray, repeat: int) -> None:
-    """The converters' CPU per frame against the library's own encode of the same pixels, and the bytes
-    each transport puts on the wire."""
+def converter_costs(repeat: int, bgr: np.ndarray | None = None, depth: np.ndarray | None = None) -> dict:
+    """Per transport, the bridge's converter on one 1080p frame as the simulator sends it (BGR, float16
+    depth): its CPU ms per frame (`converter_ms`), the library's own encode of the same pixels timed in
+    turn with it (`library_ms`, `ratio`; none for the raw images) and the bytes on the wire (`wire_bytes`,
+    the serialised ROS message). OpenCV on one thread, as one worker encodes."""
+    import cv2
+
     from airsim_mapper.convert import image_transport, registry
     from airsim_mapper.convert.context import ConvertContext
 
+    cv2.setNumThreads(1)
+    bgr = colour_frame() if bgr is None else bgr
+    depth = depth_frame() if depth is None else depth
     half = depth.astype("<f2")
     colour_msg = {"time_stamp": 1, "width": W, "height": H, "encoding": "BGR", "data": bgr.tobytes()}
     depth_msg = {"time_stamp": 1, "width": W, "height": H, "encoding": "16FC1", "data": half.tobytes()}
     metres = half.astype(np.float32)
     params = {"depth_max": 100.0, "depth_quantization": 100.0, "png_level": PNG_LEVEL}
     rows = [
-        ("raw Image bgr8", "image", colour_msg, {}, None),
-        ("raw Image 32FC1", "image", depth_msg, {}, None),
-        ("compressed jpeg", "image_compressed", colour_msg, {}, lambda: image_transport.encode_jpeg(bgr)),
+        (RAW, "image", colour_msg, {}, None),
+        (RAW_DEPTH, "image", depth_msg, {}, None),
+        (JPEG, "image_compressed", colour_msg, {}, lambda: image_transport.encode_jpeg(bgr)),
         (
-            "compressed png",
+            PNG,
             "image_compressed",
             colour_msg,
             {"format": "png", "png_level": PNG_LEVEL},
             lambda: image_transport.encode_png(bgr, PNG_LEVEL),
         ),
         (
-            "compressedDepth",
+            COMPRESSED_DEPTH,
             "image_compressed_depth",
             depth_msg,
             params,
             lambda: image_transport.compressed_depth(metres, 100.0, 100.0, PNG_LEVEL).data,
         ),
     ]
-    print(f"\n{'transport':<22} {'converter ms':>12} {'library ms':>10} {'ratio':>6} {'wire bytes':>11}")
+    out: dict[str, dict] = {}
     for name, converter, message, rule_params, library in rows:
         convert = registry.get(converter)
         ctx = ConvertContext(frame_id="bench", params=rule_params)
-        size = wire_bytes(convert(message, ctx))
+        row: dict = {"wire_bytes": wire_bytes(convert(message, ctx))}
         run = functools.partial(convert, message, ctx)
         if library is None:
-            ms, _out = cpu_ms(run, repeat)
-            print(f"{name:<22} {ms:12.2f} {'':>10} {'':>6} {size:11d}")
-            continue
-        ms, own = paired_ms(run, library, repeat)
-        print(f"{name:<22} {ms:12.2f} {own:10.2f} {ms / own:6.2f} {size:11d}")
+            row["converter_ms"], _out = cpu_ms(run, repeat)
+        else:
+            row["converter_ms"], row["library_ms"] = paired_ms(run, library, repeat)
+            row["ratio"] = row["converter_ms"] / row["library_ms"] if row["library_ms"] > 0 else None
+        out[name] = row
+    return out
+
+
+def converter_table(costs: dict) -> str:
+    """The converters' rows: CPU per frame, the library's own and their ratio, and the bytes on the wire."""
+    lines = [
+        f"{'1080p transport':<22} {'converter ms':>12} {'library ms':>10} {'ratio':>6} {'wire bytes':>11}"
+    ]
+    for name, row in costs.items():
+        own = f"{row['library_ms']:10.2f}" if "library_ms" in row else f"{'':>10}"
+        times = f"{row['ratio']:6.2f}" if row.get("ratio") is not None else f"{'':>6}"
+        lines.append(f"{name:<22} {row['converter_ms']:12.2f} {own} {times} {row['wire_bytes']:11d}")
+    return "\n".join(lines) + "\n"
 
 
 def main() -> None:
@@ -187,7 +211,8 @@ def main() -> None:
         ms, out = cpu_ms(encode, args.repeat)
         print(f"{name:<26} {ms:8.2f} {len(out):10d}")
     print(f"{'depth quantisation':<26} {quantise_ms:8.2f}")
-    converter_rows(bgr, depth, args.repeat)
+    print()
+    print(converter_table(converter_costs(args.repeat, bgr, depth)))
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ from statistics import median
 from typing import Any
 
 from tools import camera_probe
-from tools.bench import renderers
+from tools.bench import encoders, renderers, transports
 from tools.bench.results import (
     BGR,
     DEPTH,
@@ -33,6 +33,8 @@ POSE_HZ = 100.0
 SCALE_CAMERA_HZ = 10.0
 SCALE_POSE_P99_MS = 4.0  # the ten drones' worst pose p99 target
 SCALE_CORES = 0.25  # the ten drones' CPU target
+CAMERA_P99_RATIO = 0.8  # pose p99 under a 1080p camera @30 over the bare forwarder's
+JPEG_LIBRARY_RATIO = 1.2  # the JPEG converter's CPU per frame over the library's own encode
 
 
 @dataclass(frozen=True)
@@ -106,7 +108,7 @@ def floor_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
             apart = both["camera_apart"]
             note += f"; images read apart: {times(p99_ratio(*apart))}, {_p99_note(*apart)}"
         name = "pose p99 under a 1080p camera @30 / the forwarder's"
-        out.append(_p99_ratio_target(name, rounds, len(every) - len(rounds), 0.8, note))
+        out.append(_p99_ratio_target(name, rounds, len(every) - len(rounds), CAMERA_P99_RATIO, note))
     if "camera_load" in both:
         every = latency_rounds(e2e, "camera_load")
         rounds = judged_rounds(every)
@@ -211,6 +213,55 @@ def _target(
     return {"target": name, "value": value, "limit": limit, "unit": unit, "met": met, "note": note}
 
 
+def transport_targets(results: dict[str, Any]) -> list[dict[str, Any]]:
+    """image_transport's targets: the JPEG converter against the library's own encode of the same frame,
+    and, end to end, the compressed topics' rates and the pose p99 with a `/compressed` subscriber over the
+    bare forwarder's under the same camera (the pose p99 target of the raw camera at 30 Hz)."""
+    out: list[dict[str, Any]] = []
+    encoded = results.get("encoders")
+    if encoded:
+        jpeg = encoded[encoders.JPEG]
+        wire = ", ".join(f"{name} {row['wire_bytes']}" for name, row in encoded.items())
+        note = f"converter {ms(jpeg['converter_ms'])} ms, library {ms(jpeg['library_ms'])} ms; "
+        note += f"bytes on the wire: {wire}"
+        name = "1080p JPEG encode CPU per frame / the library's own encode of the same frame"
+        out.append(_limit(name, jpeg.get("ratio"), JPEG_LIBRARY_RATIO, "x", note))
+    e2e = results.get("e2e") or {}
+    windows = e2e.get("transports")
+    if not windows:
+        return out
+    jpeg_window, depth_window = windows["compressed"], windows["compressed_depth"]
+    jpeg_topic = topic(jpeg_window, transports.compressed_topic())
+    depth_topic = topic(depth_window, transports.depth_topic())
+    note = f"{jpeg_topic.get('message_bytes', '-')} bytes/msg"
+    out.append(
+        _least(
+            "1080p @30 BGR with a /compressed subscriber delivered",
+            jpeg_topic["rate_hz"],
+            transports.JPEG_MIN_HZ,
+            "Hz",
+            note,
+        )
+    )
+    note = f"{depth_topic['rate_hz']:.1f} Hz, {depth_topic.get('message_bytes', '-')} bytes/msg"
+    out.append(
+        _least(
+            "1080p @30 depth with a /compressedDepth subscriber delivered",
+            depth_topic["rate_hz"],
+            transports.DEPTH_MIN_HZ,
+            "Hz",
+            note,
+        )
+    )
+    floor = e2e.get("forwarder", {}).get("camera")
+    if floor:
+        name = "pose p99 under a 1080p camera @30 with a /compressed subscriber / the forwarder's"
+        out.append(
+            _limit(name, p99_ratio(jpeg_window, floor), CAMERA_P99_RATIO, "x", _p99_note(jpeg_window, floor))
+        )
+    return out
+
+
 def cost_targets(costs: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
     """The converter costs against COST_LIMITS."""
     judge = {False: _limit, True: _least}
@@ -221,7 +272,7 @@ def cost_targets(costs: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
 
 def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
     """Every target with the measured value, the limit and whether it is met."""
-    out = cost_targets(results["costs"])
+    out = cost_targets(results["costs"]) + transport_targets(results)
     if "renderers" in results:
         for name, value, limit in renderers.targets(results["renderers"]):
             out.append(_least(name, value, limit, "/s", "headless server, OpenGL on llvmpipe"))
