@@ -235,6 +235,7 @@ def main(argv: list[str] | None = None) -> int:
         host.floor_over_target(e2e),
         host.forwarder_over_latency_target(e2e),
         host.forwarder_over_cpu_target(e2e),
+        host.forwarder_under_compressed_rate(e2e),
     ):
         if warning:
             print(warning)

@@ -5,7 +5,16 @@ from __future__ import annotations
 
 from typing import Any
 
-from tools.bench.results import median_of, median_worst_p99, of_kind, ratio, round_medians, scale_rounds
+from tools.bench import scenes, transports
+from tools.bench.results import (
+    median_of,
+    median_worst_p99,
+    of_kind,
+    ratio,
+    round_medians,
+    scale_rounds,
+    topic,
+)
 from tools.bench.sampling import QUIET_STOLEN_SHARE
 from tools.bench.tables import ms, times
 from tools.bench.targets import SCALE_CORES, SCALE_POSE_P99_MS
@@ -102,4 +111,21 @@ def forwarder_over_latency_target(e2e: dict[str, Any]) -> str | None:
         f"{_of_rounds(known)}, over the "
         f"{SCALE_POSE_P99_MS:g} ms target: a plain rospy subscriber got no better through the client on this "
         f"host during the run; the bridge's p99 over the forwarder's ({times(bridge)}) is the figure to read"
+    )
+
+
+def forwarder_under_compressed_rate(e2e: dict[str, Any]) -> str | None:
+    """A warning when the bare forwarder alone delivered the raw 1080p camera at 30 Hz under the rate the
+    `/compressed` topic's target asks: the host could not carry those frames during the run, encoded or
+    not, and a missed compressed rate is the host's."""
+    floor = e2e.get("forwarder", {}).get("camera")
+    if not floor or "transports" not in e2e:
+        return None
+    rate = topic(floor, scenes.image_topic(1))["rate_hz"]
+    if rate >= transports.JPEG_MIN_HZ:
+        return None
+    return (
+        f"warning: the bare forwarder alone delivered the raw 1080p camera at {rate:.1f} Hz, under the "
+        f"{transports.JPEG_MIN_HZ:g} Hz the /compressed target asks: the host could not carry those frames "
+        "during this run, whatever the encoder does"
     )

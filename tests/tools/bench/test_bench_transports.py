@@ -3,7 +3,7 @@ the issue's rate targets, the JPEG converter against the library's own encode, p
 
 from __future__ import annotations
 
-from tools.bench import encoders, scenes, tables, targets, transports
+from tools.bench import encoders, host, scenes, tables, targets, transports
 
 
 def window(rates: dict[str, float], cores: float = 0.3) -> dict:
@@ -118,3 +118,12 @@ def test_the_converter_table_shows_every_transports_bytes():
         "compressedDepth",
     ]
     assert lines[3].split()[-2:] == ["1.00", "150000"] and lines[1].split()[-1] == "6220857"
+
+
+def test_a_bare_forwarder_under_the_compressed_rate_is_called_out_as_the_hosts():
+    slow = end_to_end(25.0, 16.0, 7.0)
+    slow["forwarder"]["camera"]["topics"][scenes.image_topic(1)]["rate_hz"] = 27.5
+    warning = host.forwarder_under_compressed_rate(slow)
+    assert warning is not None and "27.5 Hz, under the 29 Hz" in warning
+    assert host.forwarder_under_compressed_rate(end_to_end(25.0, 16.0, 7.0)) is None
+    assert host.forwarder_under_compressed_rate({}) is None
