@@ -17,6 +17,7 @@ from tools.bench.results import (
     judged_rounds,
     latency_rounds,
     median_of,
+    median_worst_p99,
     of_kind,
     p99_ratio,
     pairs,
@@ -253,12 +254,14 @@ def transport_targets(results: dict[str, Any]) -> list[dict[str, Any]]:
             note,
         )
     )
-    floor = e2e.get("forwarder", {}).get("camera")
+    # the forwarder's p99 under the raw camera: the median over that case's judged rounds, as it is judged
+    floor, known = median_worst_p99(judged_rounds(latency_rounds(e2e, "camera")), "forwarder")
     if floor:
+        ours = worst_pose(jpeg_window)[1]
         name = "pose p99 under a 1080p camera @30 with a /compressed subscriber / the forwarder's"
-        out.append(
-            _limit(name, p99_ratio(jpeg_window, floor), CAMERA_P99_RATIO, "x", _p99_note(jpeg_window, floor))
-        )
+        note = f"bridge {ms(ours)} ms, bare forwarder {ms(floor)} ms"
+        note += f" (the median of its {known} rounds under the raw camera)" if known > 1 else ""
+        out.append(_limit(name, ratio(ours, floor), CAMERA_P99_RATIO, "x", note))
     return out
 
 

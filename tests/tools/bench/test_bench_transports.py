@@ -84,8 +84,23 @@ def end_to_end(jpeg_hz: float, depth_hz: float, pose_p99: float) -> dict:
             "compressed": compressed,
             "compressed_depth": window({transports.depth_topic(): depth_hz}),
         },
+        "bridge": {"camera": floor},
+        "pose": {},
+        "scale": {},
         "forwarder": {"camera": floor},
+        "rounds": {
+            "camera": [
+                {"bridge": floor, "forwarder": floor_of(30.0)},
+                {"bridge": floor, "forwarder": floor_of(12.0)},
+            ]
+        },
     }
+
+
+def floor_of(pose_p99: float) -> dict:
+    result = window({scenes.image_topic(1): 30.0, scenes.pose_topic(1): 100.0})
+    result["topics"][scenes.pose_topic(1)]["latency_p99_ms"] = pose_p99
+    return result
 
 
 def test_the_compressed_rates_and_pose_p99_are_judged_with_the_raw_cameras_p99_limit():
@@ -96,8 +111,13 @@ def test_the_compressed_rates_and_pose_p99_are_judged_with_the_raw_cameras_p99_l
     assert (jpeg["value"], jpeg["limit"], jpeg["met"]) == (29.5, 29.0, True)
     assert (depth["value"], depth["limit"], depth["met"]) == (16.0, 15.0, True)
     assert "16.0 Hz" in depth["note"] and "1000 bytes/msg" in depth["note"]
-    assert (pose["value"], pose["limit"], pose["met"]) == (0.7, targets.CAMERA_P99_RATIO, True)
-    missed = by_name(targets.transport_targets({"e2e": end_to_end(25.0, 12.0, 9.0)}))
+    # the forwarder's p99 is the median of its rounds under the raw camera: 10, 30 and 12 ms
+    assert (pose["value"], pose["limit"], pose["met"]) == (7.0 / 12.0, targets.CAMERA_P99_RATIO, True)
+    assert (
+        pose["note"]
+        == "bridge 7.00 ms, bare forwarder 12.00 ms (the median of its 3 rounds under the raw camera)"
+    )
+    missed = by_name(targets.transport_targets({"e2e": end_to_end(25.0, 12.0, 10.0)}))
     assert [row["met"] for row in missed.values()] == [False, False, False]
 
 
