@@ -56,7 +56,6 @@ __all__ = ["SETTINGS", "SettingError", "connect", "given_settings", "main", "par
 __all__ += ["run", "values"]
 
 log = ros_logger("airsim_mapper.node")
-ROS2_NOT_YET = "ROS 2: rclpy is here, but this version of the node runs on ROS1 only (--ros 1, from .venv)"
 WAITING_FOR_SCENE = "no --scene: waiting for a scene file name on"  # logged with the topic, once waiting
 
 
@@ -232,8 +231,9 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     argv = sys.argv if argv is None else argv
     try:
         if choose(requested(argv[1:])) == "2":
-            print(f"airsim-mapper-node: {ROS2_NOT_YET}", file=sys.stderr)
-            return 1
+            from airsim_mapper.cli import node_ros2
+
+            return node_ros2.main(argv, stop, parse_args, config_problem)
     except FlavourError as exc:
         print(f"airsim-mapper-node: {exc}", file=sys.stderr)
         return 1

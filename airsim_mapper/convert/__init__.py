@@ -4,9 +4,11 @@
 (`__all__`, the modules the layers above import): `catalog`, `registry`, `context` (ConvertContext),
 `errors`, the helpers the engine's runners share with the converters (`command.require_finite`,
 `pose.camera_pose_key`), `buffer_data` (the parts of a message sent apart, which the engine publishes),
-and `rviz_radar` (radar scans as RViz markers, for `scripts/radar_markers.py`).
+`flavour` (which ROS's messages the converters build, decided at import), and `rviz_radar` (radar scans
+as RViz markers, for `scripts/radar_markers.py`).
 """
 
 from __future__ import annotations
 
-__all__ = ["buffer_data", "catalog", "command", "context", "errors", "pose", "registry", "rviz_radar"]
+__all__ = ["buffer_data", "catalog", "command", "context", "errors", "flavour", "pose", "registry"]
+__all__ += ["rviz_radar"]

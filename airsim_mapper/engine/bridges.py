@@ -23,15 +23,21 @@ from airsim_mapper.common.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.convert.pose import camera_pose_key
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
-from airsim_mapper.engine.publish import publish
 from airsim_mapper.engine.replays import LatchedReplays
-from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.mapping.model import BridgeSpec
+
+if ROS2:
+    from airsim_mapper.engine.ros2_link import ClosedEndpoint, publish, transform_from_pose
+    from airsim_mapper.engine.ros2_link import Ros2Link as RosLink
+else:
+    from airsim_mapper.engine.publish import publish
+    from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 
 log = ros_logger("airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0

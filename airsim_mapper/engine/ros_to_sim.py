@@ -14,8 +14,8 @@ from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.errors import ConversionError
 from airsim_mapper.engine.bridges import Bridge, BridgeParts, _accepted
 from airsim_mapper.engine.replays import LatchedReplays, connection_header
-from airsim_mapper.engine.ros_link import FrameUnknown
 from airsim_mapper.engine.sim_link import SimLinkError
+from airsim_mapper.engine.tf_poses import FrameUnknown
 from airsim_mapper.mapping.model import BridgeSpec
 
 __all__ = ["RosService", "RosToSim"]
