@@ -25,7 +25,6 @@ from airsim_mapper.common.logs import ros_logger
 log = ros_logger("airsim_mapper.node")
 DEFAULT_NODE_NAME = "projectairsim"
 STOP_CHECK_S = 1.0
-LEVELS = ((logging.ERROR, "error"), (logging.WARNING, "warning"), (logging.INFO, "info"))
 
 
 class RclpyHandler(logging.Handler):
@@ -37,10 +36,17 @@ class RclpyHandler(logging.Handler):
         self._logger = logger
 
     def emit(self, record: logging.LogRecord) -> None:
+        # rclpy ties a severity to each calling line: one call per severity
         try:
-            text = self.format(record)
-            level = next((name for number, name in LEVELS if record.levelno >= number), "debug")
-            getattr(self._logger, level)(text)
+            text, level, logger = self.format(record), record.levelno, self._logger
+            if level >= logging.ERROR:
+                logger.error(text)
+            elif level >= logging.WARNING:
+                logger.warning(text)
+            elif level >= logging.INFO:
+                logger.info(text)
+            else:
+                logger.debug(text)
         except Exception:  # a log record must never break the code that logged it
             self.handleError(record)
 
