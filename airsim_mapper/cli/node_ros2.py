@@ -25,6 +25,7 @@ from airsim_mapper.common.logs import ros_logger
 log = ros_logger("airsim_mapper.node")
 DEFAULT_NODE_NAME = "projectairsim"
 STOP_CHECK_S = 1.0
+SPIN_S = 0.5  # the executor's wait, between checks that rclpy still runs
 
 
 class RclpyHandler(logging.Handler):
@@ -49,6 +50,22 @@ class RclpyHandler(logging.Handler):
                 logger.debug(text)
         except Exception:  # a log record must never break the code that logged it
             self.handleError(record)
+
+
+def spin(executor: Any, context: Any) -> None:
+    """Run the executor until rclpy shuts down. A bridge stopped on a scene change destroys its endpoints
+    while the executor may be waiting on them; rclpy then raises InvalidHandle from the wait, and the
+    executor carries on with the endpoints that are left."""
+    from rclpy.exceptions import InvalidHandle
+    from rclpy.executors import ExternalShutdownException, ShutdownException
+
+    while context.ok():
+        try:
+            executor.spin_once(timeout_sec=SPIN_S)
+        except InvalidHandle:
+            continue
+        except (ExternalShutdownException, ShutdownException):
+            return
 
 
 def overridden(node: Any) -> dict[str, Any]:
@@ -81,7 +98,7 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     logging.getLogger("rosout").setLevel(logging.INFO)
     executor = MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, name="rclpy-executor", daemon=True)
+    spinner = threading.Thread(target=spin, args=(executor, node.context), name="rclpy-executor", daemon=True)
     spinner.start()
     stop.at_once = False
     engine = None

@@ -58,7 +58,7 @@ def main(argv: list[str]) -> int:
     rclpy.init()
     node = rclpy.create_node("listen_ros2")
     got: dict[str, dict] = {}
-    tf_frames: set[str] = set()
+    tf_frames: dict[str, set[str]] = {}
     for type_name, topic in topics:
         durability = DurabilityPolicy.TRANSIENT_LOCAL if topic == "/tf_static" else DurabilityPolicy.VOLATILE
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT, durability=durability)
@@ -66,9 +66,10 @@ def main(argv: list[str]) -> int:
             qos.reliability = ReliabilityPolicy.RELIABLE
 
         def on_message(msg: object, topic: str = topic) -> None:
-            if topic == "/tf":
-                tf_frames.update(summary(msg)["frames"])
-                got[topic] = {"type": "TFMessage", "frames": sorted(tf_frames)}
+            if topic in ("/tf", "/tf_static"):
+                frames = tf_frames.setdefault(topic, set())
+                frames.update(summary(msg)["frames"])
+                got[topic] = {"type": "TFMessage", "frames": sorted(frames)}
             elif topic not in got:
                 got[topic] = summary(msg)
 

@@ -1,0 +1,99 @@
+"""The node on ROS 2: .venv-ros2's airsim-mapper-node bridges the headless server with the shipped default
+mapping, and an rclpy listener in another process reads its pose, images, camera_info, lidar, radar, tf and
+clock, and calls a service; SIGINT stops the node cleanly."""
+
+from __future__ import annotations
+
+import json
+import math
+import signal
+import subprocess
+from pathlib import Path
+
+import pytest
+from harness import Rig
+from ros2kit import ROOT, ros2_env
+
+pytestmark = pytest.mark.live  # starts the server, the node and a listener
+
+NODE = ROOT / ".venv-ros2" / "bin" / "airsim-mapper-node"
+LISTENER = Path(__file__).resolve().parent / "listen_ros2.py"
+DRONE = "/airsim_node/Drone1"
+TOPICS = {
+    "pose": ("geometry_msgs/PoseStamped", f"{DRONE}/actual_pose"),
+    "scene": ("sensor_msgs/Image", f"{DRONE}/DownCamera/scene_camera/image"),
+    "depth": ("sensor_msgs/Image", f"{DRONE}/DownCamera/depth_planar_camera/image"),
+    "info": ("sensor_msgs/CameraInfo", f"{DRONE}/DownCamera/scene_camera/camera_info"),
+    "lidar": ("sensor_msgs/PointCloud2", f"{DRONE}/lidar1/lidar"),
+    "radar": ("radar_msgs/RadarScan", f"{DRONE}/radar1/radar_detections"),
+    "tf": ("tf2_msgs/TFMessage", "/tf"),
+    "tf_static": ("tf2_msgs/TFMessage", "/tf_static"),
+    "clock": ("rosgraph_msgs/Clock", "/clock"),
+}
+TAKEOFF = f"{DRONE}/takeoff"
+
+
+def listen(python: Path, domain: int, seconds: float, *extra: str) -> dict:
+    args = [f"{kind}={topic}" for kind, topic in TOPICS.values()]
+    out = subprocess.run(
+        [str(python), str(LISTENER), str(seconds), *args, *extra],
+        env=ros2_env(domain),
+        capture_output=True,
+        text=True,
+        timeout=seconds + 60,
+    )
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_the_ros2_node_bridges_the_default_mapping_and_stops_on_sigint(
+    launcher: Rig, ros2_python: Path, ros_domain: int
+) -> None:
+    server = launcher.simserver()
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}  # the node's environment: .venv-ros2's
+    argv = [str(NODE), *server.ports.args(), "--simconfigpath", str(ROOT / "sim_config")]
+    node = launcher.start("node_ros2", [*argv, "--scene", "scene_drone_sensors.jsonc", "--ros", "2"])
+
+    heard = listen(ros2_python, ros_domain, 60.0, f"call:{TAKEOFF}")
+    topics = heard["topics"]
+    missing = [name for name, (_kind, topic) in TOPICS.items() if topic not in topics]
+    assert missing == [], f"{missing} never arrived; node log:\n{node.output()[-3000:]}"
+
+    pose = topics[f"{DRONE}/actual_pose"]
+    assert pose["frame_id"] == "map"
+    assert math.isclose(sum(v * v for v in pose["orientation"]), 1.0, rel_tol=1e-6)
+
+    scene = topics[TOPICS["scene"][1]]
+    assert (scene["encoding"], scene["width"], scene["height"]) == ("bgr8", 320, 240)
+    assert scene["step"] == 320 * 3 and scene["data_len"] == 320 * 240 * 3
+    assert scene["frame_id"] == "airsim_node/Drone1/DownCamera/scene_camera_optical"
+    depth = topics[TOPICS["depth"][1]]
+    assert (depth["encoding"], depth["data_len"]) == ("32FC1", 320 * 240 * 4)
+
+    info = topics[TOPICS["info"][1]]
+    f = info["k"][0]
+    assert info["k"] == [f, 0.0, 160.0, 0.0, f, 120.0, 0.0, 0.0, 1.0]
+    assert info["p"] == [f, 0.0, 160.0, 0.0, 0.0, f, 120.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+    assert math.isclose(f, 160.0) and info["distortion_model"] == "plumb_bob" and info["d"] == [0.0] * 5
+
+    lidar = topics[TOPICS["lidar"][1]]
+    assert lidar["fields"] == ["x", "y", "z", "intensity", "segmentation"]
+    assert (
+        lidar["width"] > 0 and lidar["data_len"] == lidar["width"] * lidar["point_step"] == lidar["row_step"]
+    )
+
+    radar = topics[TOPICS["radar"][1]]
+    assert radar["frame_id"] == "airsim_node/Drone1/radar1" and radar["returns"] >= 0
+
+    assert "map>airsim_node/Drone1" in topics["/tf"]["frames"]
+    static = topics["/tf_static"]["frames"]
+    assert "airsim_node/Drone1>airsim_node/Drone1/DownCamera/scene_camera_optical" in static
+    assert "airsim_node/Drone1>airsim_node/Drone1/lidar1" in static
+    assert topics["/clock"]["clock"][0] * 10**9 + topics["/clock"]["clock"][1] > 0
+
+    assert heard["services"][TAKEOFF] == {"success": True, "message": ""}
+
+    node.popen.send_signal(signal.SIGINT)
+    assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
+    assert "stopping (SIGINT)" in node.output()
+    assert "Traceback" not in node.output()
