@@ -105,5 +105,5 @@ def scan_markers(scan: Any, convention: str = "frd", style: MarkerStyle | None =
     marker.color = ColorRGBA(**dict(zip("rgba", map(float, WEAK_RGBA))))
     marker.lifetime = duration(style.lifetime_s)
     marker.points = [Point(x=x, y=y, z=z) for x, y, z in xyz.tolist()]
-    marker.colors = [ColorRGBA(*c) for c in amplitude_colors(table[:, 4]).tolist()]
+    marker.colors = [ColorRGBA(r=r, g=g, b=b, a=a) for r, g, b, a in amplitude_colors(table[:, 4]).tolist()]
     return MarkerArray(markers=[marker])

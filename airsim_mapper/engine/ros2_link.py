@@ -18,7 +18,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from airsim_mapper.common.geometry import q_conjugate, q_mul, q_normalized, q_rotate
 from airsim_mapper.common.ros_types import generated_kind
-from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.engine.errors import EngineError, RosTypeError
 from airsim_mapper.engine.tf_poses import FrameUnknown, moved_pose, transform_from_pose
 
 __all__ = ["ClosedEndpoint", "FrameUnknown", "Ros2Link", "publish", "qos_for", "transform_from_pose"]
@@ -45,10 +45,6 @@ RELIABLE_DEPTH = 10
 
 class ClosedEndpoint(EngineError, RuntimeError):
     """A message went to a publisher a concurrent stop destroyed."""
-
-
-class RosTypeError(EngineError, LookupError):
-    """A ROS message or service type could not be imported."""
 
 
 def message_class(ros_type: str, kind: str = "msg") -> type:

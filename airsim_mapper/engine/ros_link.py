@@ -13,17 +13,13 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
 from airsim_mapper.common.ros_types import generated_kind
-from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.engine.errors import RosTypeError
 from airsim_mapper.engine.rospy_internals import widen_accept_backlog
 from airsim_mapper.engine.tf_poses import FrameUnknown, moved_pose, transform_from_pose
 
 __all__ = ["FrameUnknown", "RosLink", "message_class", "moved_pose", "publisher", "transform_from_pose"]
 CLEAR_AGAIN_S = 1.0  # tf's buffer is cleared once more this long after a jump back in time
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
-
-
-class RosTypeError(EngineError, LookupError):
-    """A ROS message or service type could not be imported."""
 
 
 def message_class(ros_type: str, kind: str = "msg") -> type:
