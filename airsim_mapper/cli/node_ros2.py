@@ -85,6 +85,7 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     from rclpy.signals import SignalHandlerOptions
     from rclpy.utilities import remove_ros_args
 
+    from airsim_mapper.engine import Diagnostics, close_client
     from airsim_mapper.mapping.names import resolve_namespace
 
     args = parse_args(remove_ros_args(argv)[1:])
@@ -101,7 +102,7 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     spinner = threading.Thread(target=spin, args=(executor, node.context), name="rclpy-executor", daemon=True)
     spinner.start()
     stop.at_once = False
-    engine = None
+    engine = diagnostics = None
     try:
         given = given_settings(args)
         from_parameters = overridden(node)
@@ -123,14 +124,17 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
         if failure:
             print(failure, file=sys.stderr)
             return 1
+        if engine is not None:
+            diagnostics = Diagnostics(engine, ros_name)
+            diagnostics.start()
         while not stop:
             stop.wait(STOP_CHECK_S)
         log.info("stopping (%s)", signal.Signals(stop.signals[0]).name)
         return 0
     finally:
+        if diagnostics is not None:
+            diagnostics.stop()
         if engine is not None:
-            from airsim_mapper.engine import close_client
-
             engine.shutdown(max(0.5, args.shutdown_timeout - 1.5), client_topics=True)
             close_client(engine.client)
         logging.getLogger("rosout").removeHandler(handler)

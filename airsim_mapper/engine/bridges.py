@@ -139,6 +139,12 @@ class Bridge:
         self.fail(f"{what}: {type(exc).__name__}: {exc}", exc)
 
 
+def rule_qos(spec: BridgeSpec) -> dict[str, Any]:
+    """The rule's QoS as the ROS link's keyword, on ROS 2 when the rule names one (ROS1 has no QoS)."""
+    qos = getattr(spec, "qos", None)
+    return {"qos": qos} if ROS2 and qos is not None else {}
+
+
 class SimToRos(Bridge):
     """Sim topic -> converter -> ROS publisher (and/or tf). Lazy bridges follow their ROS subscribers."""
 
@@ -171,6 +177,7 @@ class SimToRos(Bridge):
                 queue_size=spec.options.queue_size,
                 latch=spec.options.latch,
                 on_peers=self._peers_changed if self.lazy else None,
+                **rule_qos(spec),
             )
         if self.lazy:
             self._peers_changed()

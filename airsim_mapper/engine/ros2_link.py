@@ -41,6 +41,20 @@ SENSOR_TYPES = frozenset(
 )
 SENSOR_DEPTH = 5
 RELIABLE_DEPTH = 10
+NAMED_PROFILES = {
+    "sensor_data": QoSProfile(
+        depth=SENSOR_DEPTH, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+    ),
+    "default": QoSProfile(
+        depth=RELIABLE_DEPTH, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE
+    ),
+    "transient_local": QoSProfile(
+        depth=1,
+        history=HistoryPolicy.KEEP_LAST,
+        reliability=ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    ),
+}
 
 
 class ClosedEndpoint(EngineError, RuntimeError):
@@ -77,6 +91,34 @@ def qos_for(ros_type: str, *, latch: bool = False, depth: int | None = None) -> 
         history=HistoryPolicy.KEEP_LAST,
         reliability=ReliabilityPolicy.RELIABLE,
     )
+
+
+def rule_profile(qos: Any, fallback: QoSProfile) -> QoSProfile:
+    """A mapping rule's QoS (a profile name, or a value with `reliability`, `durability`, `depth`,
+    `history`, each None for the default) over the family's `fallback`."""
+    if isinstance(qos, QoSProfile):
+        return qos
+    if isinstance(qos, str):
+        qos = NAMED_PROFILES.get(qos)
+        return fallback if qos is None else qos
+    out = QoSProfile(
+        depth=fallback.depth,
+        history=fallback.history,
+        reliability=fallback.reliability,
+        durability=fallback.durability,
+    )
+    for name, policy in (
+        ("reliability", ReliabilityPolicy),
+        ("durability", DurabilityPolicy),
+        ("history", HistoryPolicy),
+    ):
+        value = getattr(qos, name, None)
+        if value is not None:
+            setattr(out, name, policy[str(value).upper()])
+    depth = getattr(qos, "depth", None)
+    if depth is not None:
+        out.depth = int(depth)
+    return out
 
 
 def publish(publisher: Any, message: Any) -> None:
@@ -201,22 +243,26 @@ class Ros2Link:
         queue_size: int,
         latch: bool = False,
         on_peers: Callable[[], None] | None = None,
-        qos: QoSProfile | None = None,
+        qos: Any = None,
     ) -> Publisher:
-        """A publisher of `ros_type`; `on_peers` runs whenever a subscriber matches or leaves."""
+        """A publisher of `ros_type` (QoS: the rule's over its family's default); `on_peers` runs whenever
+        a subscriber matches or leaves."""
         events = None
         if on_peers is not None:
             events = PublisherEventCallbacks(matched=lambda _info: on_peers())
-        profile = qos or qos_for(ros_type, latch=latch, depth=queue_size)
+        profile = qos_for(ros_type, latch=latch, depth=queue_size)
+        if qos is not None:
+            profile = rule_profile(qos, profile)
         made = self.node.create_publisher(message_class(ros_type), name, profile, event_callbacks=events)
         return Publisher(self.node, made)
 
     def subscriber(
-        self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int
+        self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int, qos: Any = None
     ) -> Endpoint:
-        made = self.node.create_subscription(
-            message_class(ros_type), name, callback, qos_for(ros_type, depth=queue_size)
-        )
+        profile = qos_for(ros_type, depth=queue_size)
+        if qos is not None:
+            profile = rule_profile(qos, profile)
+        made = self.node.create_subscription(message_class(ros_type), name, callback, profile)
         return Endpoint(lambda: self.node.destroy_subscription(made))
 
     def service(self, name: str, srv_type: str, handler: Callable[[Any], Any]) -> tuple[Endpoint, type]:

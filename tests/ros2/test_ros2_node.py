@@ -1,6 +1,6 @@
 """The node on ROS 2: .venv-ros2's airsim-mapper-node bridges the headless server with the shipped default
-mapping, and an rclpy listener in another process reads its pose, images, camera_info, lidar, radar, tf and
-clock, and calls a service; SIGINT stops the node cleanly."""
+mapping, and an rclpy listener in another process reads its pose, images, camera_info, lidar, radar, tf,
+clock and diagnostics, and calls a service; SIGINT stops the node cleanly."""
 
 from __future__ import annotations
 
@@ -29,6 +29,7 @@ TOPICS = {
     "tf": ("tf2_msgs/TFMessage", "/tf"),
     "tf_static": ("tf2_msgs/TFMessage", "/tf_static"),
     "clock": ("rosgraph_msgs/Clock", "/clock"),
+    "diagnostics": ("diagnostic_msgs/DiagnosticArray", "/diagnostics"),
 }
 TAKEOFF = f"{DRONE}/takeoff"
 
@@ -90,6 +91,8 @@ def test_the_ros2_node_bridges_the_default_mapping_and_stops_on_sigint(
     assert "airsim_node/Drone1>airsim_node/Drone1/DownCamera/scene_camera_optical" in static
     assert "airsim_node/Drone1>airsim_node/Drone1/lidar1" in static
     assert topics["/clock"]["clock"][0] * 10**9 + topics["/clock"]["clock"][1] > 0
+
+    assert "projectairsim: simulator" in topics["/diagnostics"]["statuses"]
 
     assert heard["services"][TAKEOFF] == {"success": True, "message": ""}
 
