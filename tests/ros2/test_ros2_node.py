@@ -34,8 +34,8 @@ TOPICS = {
 TAKEOFF = f"{DRONE}/takeoff"
 
 
-def listen(python: Path, domain: int, seconds: float, *extra: str) -> dict:
-    args = [f"{kind}={topic}" for kind, topic in TOPICS.values()]
+def listen(python: Path, domain: int, seconds: float, *extra: str, topics: dict | None = None) -> dict:
+    args = [f"{kind}={topic}" for kind, topic in (topics or TOPICS).values()]
     out = subprocess.run(
         [str(python), str(LISTENER), str(seconds), *args, *extra],
         env=ros2_env(domain),
@@ -100,3 +100,21 @@ def test_the_ros2_node_bridges_the_default_mapping_and_stops_on_sigint(
     assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
     assert "stopping (SIGINT)" in node.output()
     assert "Traceback" not in node.output()
+
+
+def test_ros2_parameters_set_the_settings_and_a_namespace_moves_topics_and_frames(
+    launcher: Rig, ros2_python: Path, ros_domain: int
+) -> None:
+    server = launcher.simserver()
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
+    parameters = [f"topicsport:={server.ports.topics}", f"servicesport:={server.ports.services}"]
+    parameters.append("scene:=scene_basic_drone.jsonc")
+    argv = [str(NODE), "--simconfigpath", str(ROOT / "sim_config"), "--ros-args", "-r", "__ns:=/sim1"]
+    node = launcher.start("node_ros2", [*argv, *(a for p in parameters for a in ("-p", p))])
+
+    topics = {"pose": ("geometry_msgs/PoseStamped", "/sim1/airsim_node/Drone1/actual_pose")}
+    heard = listen(ros2_python, ros_domain, 60.0, topics=topics)["topics"]
+    assert heard["/sim1/airsim_node/Drone1/actual_pose"]["frame_id"] == "sim1/map", node.output()[-3000:]
+    assert "setting scene = 'scene_basic_drone.jsonc' (parameter ~scene)" in node.output()
+    node.popen.send_signal(signal.SIGINT)
+    assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
