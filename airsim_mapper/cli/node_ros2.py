@@ -102,7 +102,7 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     spinner = threading.Thread(target=spin, args=(executor, node.context), name="rclpy-executor", daemon=True)
     spinner.start()
     stop.at_once = False
-    engine = diagnostics = None
+    engine = diagnostics = reloader = None
     try:
         given = given_settings(args)
         from_parameters = overridden(node)
@@ -127,11 +127,14 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
         if engine is not None:
             diagnostics = Diagnostics(engine, ros_name)
             diagnostics.start()
+            reloader = serve_reload(engine, settings["mapping"], prepared.mapping, watch=not args.no_watch)
         while not stop:
             stop.wait(STOP_CHECK_S)
         log.info("stopping (%s)", signal.Signals(stop.signals[0]).name)
         return 0
     finally:
+        if reloader is not None:
+            reloader.stop()
         if diagnostics is not None:
             diagnostics.stop()
         if engine is not None:
@@ -141,6 +144,23 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
         executor.shutdown(timeout_sec=1.0)
         node.destroy_node()
         rclpy.try_shutdown()
+
+
+def serve_reload(engine: Any, spec: str, mapping: Any, watch: bool) -> Any:
+    """Live reload: the `~/reload_mapping` service (std_srvs/Trigger) and, with `watch`, the file watcher."""
+    from airsim_mapper.engine import MappingReloader
+
+    reloader = MappingReloader(engine, spec, mapping)
+
+    def on_request(_request: Any) -> Any:
+        outcome = reloader.reload("~reload_mapping")
+        return response(success=outcome.ok, message=outcome.message)
+
+    _service, response = engine.ros.service("~/reload_mapping", "std_srvs/Trigger", on_request)
+    if watch:
+        reloader.start()
+        log.info("watching %s for changes (--no-watch turns this off)", ", ".join(reloader.files))
+    return reloader
 
 
 def _lookup(given: dict[str, Any], name: str) -> Any:

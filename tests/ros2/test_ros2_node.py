@@ -102,7 +102,7 @@ def test_the_ros2_node_bridges_the_default_mapping_and_stops_on_sigint(
     assert "Traceback" not in node.output()
 
 
-def test_ros2_parameters_set_the_settings_and_a_namespace_moves_topics_and_frames(
+def test_ros2_parameters_set_the_settings_a_namespace_moves_topics_and_frames_and_reload_is_served(
     launcher: Rig, ros2_python: Path, ros_domain: int
 ) -> None:
     server = launcher.simserver()
@@ -113,8 +113,11 @@ def test_ros2_parameters_set_the_settings_and_a_namespace_moves_topics_and_frame
     node = launcher.start("node_ros2", [*argv, *(a for p in parameters for a in ("-p", p))])
 
     topics = {"pose": ("geometry_msgs/PoseStamped", "/sim1/airsim_node/Drone1/actual_pose")}
-    heard = listen(ros2_python, ros_domain, 60.0, topics=topics)["topics"]
+    reload = "/sim1/projectairsim/reload_mapping"
+    answers = listen(ros2_python, ros_domain, 60.0, f"call:{reload}", topics=topics)
+    heard = answers["topics"]
     assert heard["/sim1/airsim_node/Drone1/actual_pose"]["frame_id"] == "sim1/map", node.output()[-3000:]
     assert "setting scene = 'scene_basic_drone.jsonc' (parameter ~scene)" in node.output()
+    assert answers["services"][reload]["success"] is True, answers  # the node's private service: live reload
     node.popen.send_signal(signal.SIGINT)
     assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
