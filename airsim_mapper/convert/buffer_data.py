@@ -61,8 +61,9 @@ def serialize_apart(message: Any, base: type, buff: Any, after: int = 0) -> tupl
 
 
 def ros2_buffer_message(base: type) -> type:
-    """ROS 2's stand-in for a Buffer* class: a subclass of the rosidl class `base` whose constructor hands
-    ``data`` to rclpy as bytes (`flavour.byte_data`: one copy; rclpy's setter makes the other)."""
+    """ROS 2's stand-in for a Buffer* class: called as the class is, it makes a message of the rosidl class
+    `base`, with ``data`` handed to rclpy as bytes (`flavour.byte_data`: one copy; rclpy's setter makes the
+    other)."""
     from airsim_mapper.convert.flavour import byte_data
 
     def __new__(cls: type, **fields: Any) -> Any:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -41,6 +42,8 @@ SENSOR_TYPES = frozenset(
 )
 SENSOR_DEPTH = 5
 RELIABLE_DEPTH = 10
+FIRST_LOOKUP_S = 1.0  # the first goal in another frame waits this long for the node's own /tf
+LOOKUP_POLL_S = 0.05
 NAMED_PROFILES = {
     "sensor_data": QoSProfile(
         depth=SENSOR_DEPTH, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
@@ -299,10 +302,18 @@ class Ros2Link:
 
     def transform_pose(self, pose_stamped: Any, target: str) -> Any:
         """A PoseStamped in the `target` frame through this node's own latest transforms (FrameUnknown when
-        they do not connect the two frames)."""
+        they do not connect the two frames). The first lookup starts recording /tf and gives it
+        FIRST_LOOKUP_S to arrive."""
+        deadline = time.monotonic() + (0.0 if self._lookups else FIRST_LOOKUP_S)
         self._lookups = True
         source, target = pose_stamped.header.frame_id.removeprefix("/"), target.removeprefix("/")
-        return moved_pose(pose_stamped, self.frames.transform(target, source))
+        while True:
+            try:
+                return moved_pose(pose_stamped, self.frames.transform(target, source))
+            except FrameUnknown:
+                if time.monotonic() >= deadline:
+                    raise
+                time.sleep(LOOKUP_POLL_S)
 
     def forget_tf(self) -> None:
         self.frames.clear()
