@@ -121,3 +121,25 @@ def test_ros2_parameters_set_the_settings_a_namespace_moves_topics_and_frames_an
     assert answers["services"][reload]["success"] is True, answers  # the node's private service: live reload
     node.popen.send_signal(signal.SIGINT)
     assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
+
+
+def test_a_lazy_image_stream_follows_its_ros2_subscriber(
+    launcher: Rig, ros2_python: Path, ros_domain: int
+) -> None:
+    server = launcher.simserver()
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
+    argv = [str(NODE), *server.ports.args(), "--simconfigpath", str(ROOT / "sim_config")]
+    node = launcher.start("node_ros2", [*argv, "--scene", "scene_drone_sensors.jsonc"])
+    script = Path(__file__).resolve().parent / "lazy_ros2.py"
+    status, image = "/airsim_mapper/projectairsim/status", TOPICS["scene"][1]
+    out = subprocess.run(
+        [str(ros2_python), str(script), status, image, "/DownCamera/scene_camera"],
+        env=ros2_env(ros_domain),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    seen = json.loads(out.stdout.strip().splitlines()[-1])
+    assert seen["images"] > 0, node.output()[-3000:]
+    assert (seen["before"], seen["during"], seen["after"]) == (False, True, False), seen
