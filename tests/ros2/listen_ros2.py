@@ -1,9 +1,10 @@
 """An rclpy listener, run by .venv-ros2's Python against a running ROS 2 bridge node.
 
-`listen_ros2.py SECONDS TYPE=TOPIC ... [call:SERVICE]` subscribes to each topic (best-effort, which also
-matches a reliable publisher; transient-local for /tf_static), waits until every topic delivered or SECONDS
-passed, calls the std_srvs/Trigger services named, and prints one JSON line: per topic a summary of its
-first message, per service its response.
+`listen_ros2.py SECONDS TYPE=TOPIC ... [call:SERVICE] [say:TOPIC=TEXT]` subscribes to each topic
+(best-effort, which also matches a reliable publisher; transient-local for /tf_static), publishes each TEXT
+once as a std_msgs/String on its TOPIC (once a subscriber is there), waits until every topic delivered or
+SECONDS passed, calls the std_srvs/Trigger services named, and prints one JSON line: per topic a summary of
+its first message, per service its response.
 """
 
 from __future__ import annotations
@@ -55,8 +56,9 @@ def summary(msg: object) -> dict:
 
 def main(argv: list[str]) -> int:
     seconds = float(argv[0])
-    topics = [a.split("=", 1) for a in argv[1:] if not a.startswith("call:")]
+    topics = [a.split("=", 1) for a in argv[1:] if not a.startswith(("call:", "say:"))]
     services = [a[len("call:") :] for a in argv[1:] if a.startswith("call:")]
+    sayings = [a[len("say:") :].split("=", 1) for a in argv[1:] if a.startswith("say:")]
     rclpy.init()
     node = rclpy.create_node("listen_ros2")
     got: dict[str, dict] = {}
@@ -77,6 +79,15 @@ def main(argv: list[str]) -> int:
 
         node.create_subscription(message_type(type_name), topic, on_message, qos)
     deadline = time.monotonic() + seconds
+    if sayings:
+        from std_msgs.msg import String
+
+        for topic, text in sayings:
+            publisher = node.create_publisher(String, topic, 10)
+            while publisher.get_subscription_count() == 0 and time.monotonic() < deadline:
+                rclpy.spin_once(node, timeout_sec=0.1)
+            time.sleep(0.5)  # matched on this side; give the other side a moment to match too
+            publisher.publish(String(data=text))
     while time.monotonic() < deadline and len(got) < len(topics):
         rclpy.spin_once(node, timeout_sec=0.1)
     for _ in range(20):  # a little more /tf, for the frames of every robot

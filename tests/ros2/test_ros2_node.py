@@ -143,3 +143,17 @@ def test_a_lazy_image_stream_follows_its_ros2_subscriber(
     seen = json.loads(out.stdout.strip().splitlines()[-1])
     assert seen["images"] > 0, node.output()[-3000:]
     assert (seen["before"], seen["during"], seen["after"]) == (False, True, False), seen
+
+
+def test_a_scene_named_on_load_scene_is_loaded_and_bridged(
+    launcher: Rig, ros2_python: Path, ros_domain: int
+) -> None:
+    server = launcher.simserver()
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
+    argv = [str(NODE), *server.ports.args(), "--simconfigpath", str(ROOT / "sim_config")]
+    node = launcher.start("node_ros2", argv)  # no scene: waits for one on load_scene
+    load_scene = "/ProjectAirSim/node/projectairsim/load_scene"
+    topics = {"pose": TOPICS["pose"]}
+    heard = listen(ros2_python, ros_domain, 60.0, f"say:{load_scene}=scene_basic_drone.jsonc", topics=topics)
+    assert TOPICS["pose"][1] in heard["topics"], node.output()[-3000:]
+    assert "SceneBasicDrone" in node.output()
