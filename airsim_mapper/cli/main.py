@@ -1,5 +1,5 @@
 """airsim-mapper: project commands. `airsim-mapper topics` prints a mapping's expanded interface on a
-scene as a Markdown table (ROS name, type, direction, simulator side, frame, rule bridge).
+scene as a Markdown table (ROS name, type, direction, simulator side, frame, ROS 2 QoS, rule bridge).
 `airsim-mapper converters` prints the converter catalogue as a Markdown table (the README's table).
 `airsim-mapper ros-setup` prints the setup file to source so that ROS's own tools read radar_msgs/uuid_msgs.
 
@@ -27,8 +27,9 @@ from airsim_mapper.common.resources import ros_setup_file
 from airsim_mapper.convert import catalog
 from airsim_mapper.mapping.model import BridgeSpec
 from airsim_mapper.mapping.pipeline import load_and_expand
+from airsim_mapper.mapping.qos import TF_QOS, TF_STATIC_QOS
 
-HEADERS = ("ROS name", "type", "direction", "simulator", "frame", "bridge")
+HEADERS = ("ROS name", "type", "direction", "simulator", "frame", "QoS (ROS 2)", "bridge")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -74,6 +75,13 @@ def frame_cell(bridge: BridgeSpec) -> str:
     return "; ".join(parts) or "-"
 
 
+def qos_cell(bridge: BridgeSpec) -> str:
+    """The QoS a ROS 2 node gives the bridge's topic or service, or a tf-only bridge's /tf or /tf_static."""
+    if bridge.ros is None:
+        return "-" if bridge.tf is None else f"`{TF_STATIC_QOS if bridge.tf.static else TF_QOS}`"
+    return f"`{bridge.qos}`"
+
+
 def bridge_cells(bridge: BridgeSpec) -> tuple[str, ...]:
     direction = "sim → ROS" if bridge.direction == "sim_to_ros" else "ROS → sim"
     sim = f"`{bridge.sim}`" if bridge.sim else f"({bridge.sim_kind}: {bridge.converter})"
@@ -83,6 +91,7 @@ def bridge_cells(bridge: BridgeSpec) -> tuple[str, ...]:
         direction,
         sim,
         frame_cell(bridge),
+        qos_cell(bridge),
         f"`{bridge.name}`",
     )
 

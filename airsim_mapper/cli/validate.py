@@ -1,4 +1,5 @@
-"""validate-mapping: check a mapping offline and, with --scene, show the bridges it makes.
+"""validate-mapping: check a mapping offline and, with --scene, show the bridges it makes; with --ros 2,
+its ROS names must also be ones ROS 2 takes.
 
 Exit status: 0 valid, 1 the mapping or scene is invalid (every problem on stderr as FILE:LINE:COL: message;
 with --format json, on stdout as {"problems": [{file, line, column, message, key}, ...]}), 2 usage errors
@@ -52,6 +53,14 @@ def _parser() -> argparse.ArgumentParser:
         choices=("text", "json"),
         default="text",
         help='output format; json also reports problems on stdout, as {"problems": [...]}',
+    )
+    parser.add_argument(
+        "--ros",
+        type=int,
+        choices=(1, 2),
+        default=1,
+        help="the ROS whose name rules the mapping's names must also keep (2: ROS 2's, as the node checks "
+        "at start-up on ROS 2; default 1)",
     )
     parser.add_argument(
         "--resolved",
@@ -117,9 +126,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(resolved_yaml(args.mapping), end="")
             return EXIT_OK
         if args.scene is None:
+            from airsim_mapper.mapping.errors import MappingError
             from airsim_mapper.mapping.loader import load_mapping
+            from airsim_mapper.mapping.ros2_names import rule_problems
 
             mapping = load_mapping(args.mapping)
+            if args.ros == 2 and rule_problems(mapping):
+                raise MappingError(rule_problems(mapping))
             rows = [rule_row(rule) for rule in mapping.rules]
             if args.format == "json":
                 print(json.dumps(rows, indent=2))
@@ -128,7 +141,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"\n{described(args.mapping)}: valid, {len(rows)} rules")
             return EXIT_OK
         mapping, scene, bridges = load_and_expand(
-            args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace
+            args.mapping, args.scene, args.simconfigpath, args.nodename, args.namespace, ros=args.ros
         )
     except ConfigError as err:
         if args.format == "json":

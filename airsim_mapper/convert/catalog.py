@@ -33,15 +33,20 @@ from airsim_mapper.convert.entries.model import (
     AFTER_HOOKS,
     CALL,
     COLOUR,
+    DEFAULT_QOS,
     FLOAT,
     PUBLISH,
+    QOS_PROFILES,
     ROS_TO_SIM,
     RUNNERS,
     SEND,
+    SENSOR_DATA,
     SERVE,
     SERVE_ALL,
+    SERVICES,
     SIM_TO_ROS,
     STREAM,
+    TRANSIENT_LOCAL,
     ConverterInfo,
 )
 
@@ -52,15 +57,20 @@ __all__ = [
     "CALL",
     "COLOUR",
     "CONVERTERS",
+    "DEFAULT_QOS",
     "FLOAT",
     "PUBLISH",
+    "QOS_PROFILES",
     "ROS_TO_SIM",
     "RUNNERS",
     "SEND",
+    "SENSOR_DATA",
     "SERVE",
     "SERVE_ALL",
+    "SERVICES",
     "SIM_TO_ROS",
     "STREAM",
+    "TRANSIENT_LOCAL",
     "ConverterInfo",
     "converters_markdown",
     "find",
@@ -88,7 +98,7 @@ def find(name: str) -> ConverterInfo | None:
 
 
 DIRECTION_LABELS = {SIM_TO_ROS: "sim → ROS", ROS_TO_SIM: "ROS → sim"}
-TABLE_HEADERS = ("converter", "direction", "ROS types", "runs on", "what it does")
+TABLE_HEADERS = ("converter", "direction", "ROS types", "runs on", "ROS 2 QoS", "what it does")
 
 
 def runs_on(info: ConverterInfo) -> str:
@@ -106,6 +116,7 @@ def converters_markdown(converters: Iterable[ConverterInfo] | None = None) -> st
             DIRECTION_LABELS[info.direction],
             ", ".join(f"`{t}`" for t in info.ros_types),
             runs_on(info),
+            f"`{info.qos}`",
             info.summary.replace("|", "\\|"),
         )
         for info in (CONVERTERS.values() if converters is None else converters)

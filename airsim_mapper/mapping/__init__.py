@@ -3,7 +3,8 @@
 Its face (`__all__`, the modules the layers above import): `loader`, `expand`, `pipeline` (both in one
 call), `model` (MappingDoc, BridgeSpec), `errors`, `diff`, `report`, `match`, `names` and `extends` (what the
 command line shows of a mapping), `reserved` (the names the node owns, its status topic's among them),
-`scene` (the scene configuration as the bridge reads it).
+`scene` (the scene configuration as the bridge reads it), `qos` (the ROS 2 QoS profiles, and those of the
+node's own tf and clock publishers) and `ros2_names` (ROS 2's name rules, which a ROS 2 node checks).
 Everything else is the mapping layer's own.
 """
 
@@ -19,7 +20,9 @@ __all__ = [
     "model",
     "names",
     "pipeline",
+    "qos",
     "report",
     "reserved",
+    "ros2_names",
     "scene",
 ]

@@ -57,11 +57,11 @@ def format_diff(diff: BridgeDiff, old: Iterable[BridgeSpec], new: Iterable[Bridg
 def changes(old: BridgeSpec, new: BridgeSpec) -> list[str]:
     """`field: old -> new` for each field that differs (options by option)."""
     out = []
-    for field in ("ros", "sim", "ros_type", "converter", "frame_id", "tf", "convention", "direction"):
+    for field in ("ros", "sim", "ros_type", "converter", "frame_id", "tf", "convention", "direction", "qos"):
         if getattr(old, field) != getattr(new, field):
             out.append(f"{field}: {getattr(old, field)} -> {getattr(new, field)}")
     if old.options != new.options:
-        for field in old.options.__dataclass_fields__:
+        for field in [name for name in old.options.__dataclass_fields__ if name != "qos"]:  # bridge's own
             a, b = getattr(old.options, field), getattr(new.options, field)
             if a != b:
                 out.append(f"{field}: {a} -> {b}")

@@ -32,7 +32,9 @@ from airsim_mapper.mapping.match import matches
 from airsim_mapper.mapping.model import BridgeSpec, MappingDoc, Rule, TfSpec
 from airsim_mapper.mapping.names import resolve_name, ros_name_problem
 from airsim_mapper.mapping.origins import place_text
+from airsim_mapper.mapping.qos import bridge_qos
 from airsim_mapper.mapping.reserved import clock_rule_on, node_names, taken_problem
+from airsim_mapper.mapping.ros2_names import ros2_name_problem
 from airsim_mapper.mapping.scene import Scene
 
 Element = tuple[str, dict[str, str], dict[str, Any]]  # (name key, variables, source)
@@ -150,6 +152,7 @@ def _bridge(rule: Rule, key: str, variables: dict[str, str], source: dict[str, A
         variables=MappingProxyType(dict(variables)),
         source=MappingProxyType(source),
         ros_kind=rule.ros_kind,
+        qos=bridge_qos(rule.options, rule.converter),
     )
 
 
@@ -184,11 +187,13 @@ def expand(
     namespace: str = "",
     node_namespace: str = "",
     ros_node: str = "",
+    ros: int = 1,
 ) -> tuple[BridgeSpec, ...]:
     """All concrete bridges of `mapping` over `scene` (only the node's own without one); MappingError when
     names are illegal or collide. Names are compared as ROS resolves them for the node `ros_node` (the last
     part of its ROS name; `node_name`, the mapping's <node_name>, when not given) in its ROS namespace
-    `node_namespace` ("" for the root): `x` and `/x` are one topic there, `~x` the node's."""
+    `node_namespace` ("" for the root): `x` and `/x` are one topic there, `~x` the node's. With `ros` 2,
+    a name must also be one that ROS 2 takes."""
     bridges: list[BridgeSpec] = []
     problems: list[Problem] = []
     owners: dict[str, BridgeSpec] = {}
@@ -215,6 +220,9 @@ def expand(
             if bridge.ros is not None:
                 at = rule.ros_place or (rule.file or mapping.source, rule.line, 1)  # its `ros`, or the rule
                 why = ros_name_problem(bridge.ros)
+                if not why and ros == 2:
+                    why = ros2_name_problem(bridge.ros, ros_node, node_namespace)
+                    why = why and f"ROS 2 refuses it: {why}"
                 full = resolve_name(bridge.ros, ros_node, node_namespace) if not why else bridge.ros
                 taken = taken_problem(full, bridge.converter, owned)
                 if why:

@@ -28,6 +28,7 @@ from airsim_mapper.mapping.model import (
     TfSpec,
 )
 from airsim_mapper.mapping.origins import Origins, file_of, located
+from airsim_mapper.mapping.qos import qos_of
 from airsim_mapper.mapping.reserved import literal_problem
 from airsim_mapper.mapping.schema import schema_problems
 from airsim_mapper.mapping.variables import apply_variables
@@ -133,6 +134,8 @@ def _options(raw: dict[str, Any], base: Options) -> Options:
         limits_raw["position_box"] = PositionBox(tuple(box["min"]), tuple(box["max"]))
     limits = Limits(**{key: limits_raw.get(key, getattr(base.limits, key)) for key in LIMIT_KEYS})
     values["queue_size"] = int(values["queue_size"])
+    if "qos" in raw:
+        values["qos"] = qos_of(raw["qos"])
     return Options(**values, limits=limits)
 
 

@@ -66,6 +66,20 @@ class Limits:
 
 
 @dataclass(frozen=True)
+class Qos:
+    """A concrete ROS 2 quality of service: what a ROS 2 publisher, subscriber or service is made with."""
+
+    reliability: str  # "reliable" or "best_effort"
+    durability: str  # "volatile" or "transient_local"
+    depth: int  # history depth (keep_last)
+    history: str = "keep_last"  # or "keep_all"
+
+    def __str__(self) -> str:
+        depth = "all" if self.history == "keep_all" else str(self.depth)
+        return f"{self.reliability}/{self.durability}/{depth}"
+
+
+@dataclass(frozen=True)
 class Options:
     """Per-rule options; the mapping's `defaults` fill whatever a rule leaves out."""
 
@@ -78,6 +92,7 @@ class Options:
     enabled: bool = True
     watchdog_s: float | None = None  # ros_to_sim: act when no message arrives for this long
     limits: Limits = field(default_factory=Limits)
+    qos: Qos | None = None  # ROS 2 only; None: the converter's default profile (latched: transient_local)
 
 
 @dataclass(frozen=True)
@@ -140,3 +155,4 @@ class BridgeSpec:
     variables: Mapping[str, str]  # the template variables this bridge was expanded with
     source: Mapping[str, Any]  # the scene element it came from (capture setting, sensor config, ...)
     ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)
+    qos: Qos = Qos("reliable", "volatile", 10)  # what a ROS 2 link makes it with (ROS1 ignores it)

@@ -31,6 +31,7 @@ class Prepared:
     scene: Scene | None = None
     specs: tuple[BridgeSpec, ...] | None = None
     node_namespace: str = ""  # the node's ROS namespace, where its relative names resolve
+    ros: int = 1  # the ROS whose name rules the bridges' names were checked against
 
 
 def prepare(
@@ -41,8 +42,10 @@ def prepare(
     namespace: str = "",
     known: Prepared | None = None,
     node_namespace: str = "",
+    ros: int = 1,
 ) -> Prepared:
-    """Load the mapping and, with a scene file, read the scene and expand the mapping over it; raise
+    """Load the mapping and, with a scene file, read the scene and expand the mapping over it (its names
+    checked against the rules of ROS `ros` too); raise
     MappingError or SceneConfigError (both ConfigError), or OSError. What `known` holds for the same
     sources (and names) is reused, not read (or expanded) again."""
     sources = (str(mapping_path), scene_file, str(simconfigpath))
@@ -50,13 +53,13 @@ def prepare(
     mapping = known.mapping if same else load_mapping(mapping_path)
     names = (node_name, namespace, resolve_namespace(node_namespace or "/"))  # "/a/" as "/a", "/" as ""
     if not scene_file:
-        return Prepared(sources, node_name, namespace, mapping, node_namespace=names[2])
+        return Prepared(sources, node_name, namespace, mapping, node_namespace=names[2], ros=ros)
     scene = known.scene if same else read_scene(simconfigpath, scene_file)
-    if same and (known.node_name, known.namespace, known.node_namespace) == names:
+    if same and (known.node_name, known.namespace, known.node_namespace, known.ros) == (*names, ros):
         specs = known.specs
     else:
-        specs = expand(mapping, scene, *names)
-    return Prepared(sources, node_name, namespace, mapping, scene, specs, names[2])
+        specs = expand(mapping, scene, *names, ros=ros)
+    return Prepared(sources, node_name, namespace, mapping, scene, specs, names[2], ros)
 
 
 def load_and_expand(
@@ -65,9 +68,11 @@ def load_and_expand(
     simconfigpath: str | Path,
     node_name: str,
     namespace: str = "",
+    ros: int = 1,
 ) -> tuple[MappingDoc, Scene, tuple[BridgeSpec, ...]]:
-    """Load the mapping, read the scene, expand; raise MappingError or SceneConfigError (both ConfigError)."""
+    """Load the mapping, read the scene, expand (its names checked for ROS `ros`); raise MappingError or
+    SceneConfigError (both ConfigError)."""
     if not scene_file:
         read_scene(simconfigpath, scene_file)  # refuses the empty name as it refuses any other
-    prepared = prepare(mapping_path, scene_file, simconfigpath, node_name, namespace)
+    prepared = prepare(mapping_path, scene_file, simconfigpath, node_name, namespace, ros=ros)
     return prepared.mapping, prepared.scene, prepared.specs  # type: ignore[return-value]

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from airsim_mapper.mapping.model import BridgeSpec, Rule
+from airsim_mapper.mapping.model import BridgeSpec, Qos, Rule
 
 COLUMNS = ("direction", "sim", "ros", "ros_type", "frame_id")
 HEADERS = ("DIRECTION", "SIMULATOR", "ROS", "TYPE", "FRAME")
@@ -28,6 +28,7 @@ def bridge_row(bridge: BridgeSpec) -> dict[str, Any]:
         "convention": bridge.convention,
         "lazy": bridge.options.lazy,
         "latch": bridge.options.latch,
+        "qos": _qos(bridge.qos),
     }
 
 
@@ -69,6 +70,16 @@ def format_rows(rows: Sequence[dict[str, Any]]) -> str:
 def format_table(bridges: Sequence[BridgeSpec]) -> str:
     """The bridges as an aligned text table."""
     return format_rows([bridge_row(b) for b in bridges])
+
+
+def _qos(qos: Qos) -> dict[str, Any]:
+    """A QoS as JSON: its four settings."""
+    return {
+        "reliability": qos.reliability,
+        "durability": qos.durability,
+        "depth": qos.depth,
+        "history": qos.history,
+    }
 
 
 def _tf(tf: Any) -> dict[str, Any] | None:

@@ -51,28 +51,28 @@ def test_the_console_script_runs_the_topics_command():
     assert result.stdout.startswith("usage: airsim-mapper topics [-h] --mapping MAPPING --scene SCENE")
 
 
-def test_topics_prints_one_markdown_row_per_bridge_with_ros_type_direction_sim_frame_and_rule(capsys):
+def test_topics_prints_one_markdown_row_per_bridge_with_ros_type_direction_sim_frame_qos_and_rule(capsys):
     status, out, _ = topics(capsys, "mappings/enu.yaml")
     assert status == 0
     lines = out.splitlines()
     assert lines[0].startswith("# ROS interface of ")
-    header = lines.index("| ROS name | type | direction | simulator | frame | bridge |")
-    assert lines[header + 1] == "|---|---|---|---|---|---|"
+    header = lines.index("| ROS name | type | direction | simulator | frame | QoS (ROS 2) | bridge |")
+    assert lines[header + 1] == "|---|---|---|---|---|---|---|"
     rows = lines[header + 2 :]
     assert "81 bridges: 46 topics, 16 services, 19 tf-only." in out
     assert len(rows) == 81
     assert (
         "| `/airsim_node/Drone1/actual_pose` | `geometry_msgs/PoseStamped` | sim → ROS | "
         "`/Sim/SceneDroneSensors/robots/Drone1/actual_pose` | `map`; tf `map` → `Drone1/base_link` | "
-        "`actual_pose[Drone1]` |"
+        "`reliable/transient_local/1` | `actual_pose[Drone1]` |"
     ) in rows
     assert (
         "| `/airsim_node/pause` (service) | `std_srvs/SetBool` | ROS → sim | "
-        "`/Sim/SceneDroneSensors/Pause` | - | `pause[SceneDroneSensors]` |"
+        "`/Sim/SceneDroneSensors/Pause` | - | `reliable/volatile/10` | `pause[SceneDroneSensors]` |"
     ) in rows
     assert (
         "| tf_static `Drone1/base_link` → `Drone1/Chase/scene_camera_optical` | - | sim → ROS | "
-        "`/Sim/SceneDroneSensors/robots/Drone1/actual_pose` | - | "
+        "`/Sim/SceneDroneSensors/robots/Drone1/actual_pose` | - | `reliable/transient_local/1` | "
         "`camera_optical_tf[Drone1/Chase/scene_camera]` |"
     ) in rows
     assert "| (node: streaming_image) |" in next(r for r in rows if "image_raw" in r)

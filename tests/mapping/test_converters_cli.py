@@ -45,22 +45,25 @@ def test_converters_prints_the_table_and_exits_0(capsys):
 
 def test_the_table_has_one_row_per_converter_in_catalogue_order():
     lines = converters_markdown().splitlines()
-    assert lines[0] == "| converter | direction | ROS types | runs on | what it does |"
-    assert lines[1] == "|---|---|---|---|---|"
+    assert lines[0] == "| converter | direction | ROS types | runs on | ROS 2 QoS | what it does |"
+    assert lines[1] == "|---|---|---|---|---|---|"
     names = [re.match(r"\| `([a-z_]+)` \|", line).group(1) for line in lines[2:]]
     assert names == list(CONVERTERS)
 
 
-def test_a_row_names_the_direction_every_ros_type_the_thread_and_escapes_bars_in_the_summary():
+def test_a_row_names_the_direction_every_ros_type_the_thread_the_qos_and_escapes_bars_in_the_summary():
     services = ("std_srvs/Trigger", "std_srvs/Empty")
-    two_types = ConverterInfo("x", ROS_TO_SIM, services, SERVE, "m", "f", "a | b")
+    two_types = ConverterInfo("x", ROS_TO_SIM, services, SERVE, "m", "f", "a | b", qos="services")
     one_type = ConverterInfo("y", SIM_TO_ROS, ("sensor_msgs/Image",), PUBLISH, "m", "f", "s")
-    light = ConverterInfo("z", SIM_TO_ROS, ("sensor_msgs/Imu",), PUBLISH, "m", "f", "t", inline=True)
+    light = ConverterInfo(
+        "z", SIM_TO_ROS, ("sensor_msgs/Imu",), PUBLISH, "m", "f", "t", inline=True, qos="sensor_data"
+    )
     rows = converters_markdown([two_types, one_type, light]).splitlines()[2:]
     assert rows == [
-        "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | rospy's callback | a \\| b |",
-        "| `y` | sim → ROS | `sensor_msgs/Image` | its topic's worker | s |",
-        "| `z` | sim → ROS | `sensor_msgs/Imu` | receive thread | t |",
+        "| `x` | ROS → sim | `std_srvs/Trigger`, `std_srvs/Empty` | rospy's callback | `services` "
+        "| a \\| b |",
+        "| `y` | sim → ROS | `sensor_msgs/Image` | its topic's worker | `default` | s |",
+        "| `z` | sim → ROS | `sensor_msgs/Imu` | receive thread | `sensor_data` | t |",
     ]
 
 

@@ -27,6 +27,16 @@ def test_bridges_are_added_removed_changed_or_kept_by_name_and_whole_spec():
     assert text.splitlines()[-1] == f"1 added, 1 removed, 1 changed, {len(rest) + 1} unchanged"
 
 
+def test_a_qos_change_is_told_as_the_bridges_qos(tmp_path, capsys):
+    new = tmp_path / "new.yaml"
+    new.write_text("version: 1\nextends: default\nrules:\n  - {name: imu, qos: {depth: 20}}\n")
+    scene = ["--scene", "scene_drone_sensors.jsonc", "--simconfigpath", str(SIM_CONFIG)]
+    assert main(["default", str(new), *scene]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    imu = [line for line in lines if line.startswith("~ imu[")]
+    assert imu and all(line.endswith("qos: best_effort/volatile/5 -> reliable/volatile/20") for line in imu)
+
+
 def test_validate_mapping_old_new_prints_the_difference_over_a_scene(tmp_path, capsys):
     new = tmp_path / "new.yaml"
     new.write_text(

@@ -28,7 +28,15 @@ def default_bridges() -> dict:
 
 
 def test_the_document_has_its_examples():
-    assert set(EXAMPLES) == {"frames", "select", "rename", "one_camera", "no_chase_depth", "readme"}
+    assert set(EXAMPLES) == {"frames", "select", "rename", "one_camera", "no_chase_depth", "readme", "qos"}
+
+
+def test_qos_makes_images_reliable_keeps_one_cloud_and_fifty_imu_samples():
+    got = bridges("qos")
+    assert str(got["camera_image[Drone1/Chase/scene_camera]"].qos) == "reliable/volatile/10"
+    assert str(got["lidar[Drone1/lidar1]"].qos) == "best_effort/volatile/1"
+    assert str(got["imu[Drone1/IMU1]"].qos) == "reliable/volatile/50"
+    assert str(got["camera_info[Drone1/Chase/scene_camera]"].qos) == "best_effort/volatile/5"
 
 
 @pytest.mark.parametrize("name", sorted(EXAMPLES))

@@ -50,6 +50,9 @@ WORDS = [
     "enabled",
     "watchdog_s",
     "stamp",
+    "qos",
+    "sensor_data",
+    "depth",
 ]
 scalars = (
     st.none()

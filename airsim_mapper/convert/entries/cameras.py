@@ -7,6 +7,7 @@ from airsim_mapper.convert.entries.model import (
     COLOUR,
     FLOAT,
     PUBLISH,
+    SENSOR_DATA,
     SIM_TO_ROS,
     STAMP,
     STREAM,
@@ -29,6 +30,7 @@ IMAGES = (
         "image",
         "image",
         "sim Image (BGR, PNG, 16FC1, 16UC1, GRAY8) -> Image (bgr8, 32FC1 metres, mono8)",
+        qos=SENSOR_DATA,
         example=Example({**STAMP, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)}),
         max_pixels=True,
     ),
@@ -41,6 +43,7 @@ IMAGES = (
         "compressed_image",
         "sim Image sent as PNG (capture setting compress: true) -> CompressedImage of those bytes, "
         "format 'bgr8; png compressed bgr8' (image_transport's compressed transport)",
+        qos=SENSOR_DATA,
         example=Example({**STAMP, "width": 1, "height": 1, "encoding": "PNG", "data": PNG_1X1}),
         max_pixels=True,
     ),
@@ -54,6 +57,7 @@ IMAGES = (
         "image_compressed",
         "sim colour Image -> CompressedImage as image_transport's compressed transport writes it: "
         "params.format jpeg (jpeg_quality, default 80) or png (png_level, default 9)",
+        qos=SENSOR_DATA,
         example=Example({**STAMP, "width": 2, "height": 1, "encoding": "BGR", "data": bytes(6)}),
         max_pixels=True,
         param_choices={"format": {"jpeg": "", "png": ""}},  # the default first
@@ -68,6 +72,7 @@ IMAGES = (
         "image_compressed_depth",
         "sim depth Image -> CompressedImage as image_transport's compressedDepth transport writes it "
         "(quantised inverse depth in a 16-bit PNG: depth_max, depth_quantization, png_level)",
+        qos=SENSOR_DATA,
         example=Example({**STAMP, "width": 1, "height": 1, "encoding": "16FC1", "data": bytes(2)}),
         max_pixels=True,
         image_kind=FLOAT,
@@ -80,6 +85,7 @@ IMAGES = (
         "camera_info",
         "camera_info",
         "sim Image (for its size and stamp) + capture settings -> CameraInfo (plumb_bob, K, P from fov)",
+        qos=SENSOR_DATA,
         example=Example({**STAMP, "width": 2, "height": 1}),
     ),
 )
@@ -92,6 +98,7 @@ STREAMING_IMAGE = converter_info(
     "image",
     "image",
     "the active streaming camera's scene image (the engine follows switch_view)",
+    qos=SENSOR_DATA,
     example=Example({**STAMP, "width": 1, "height": 1, "encoding": "16FC1", "data": bytes(2)}),
     max_pixels=True,
 )

@@ -3,7 +3,16 @@ and scene loading."""
 
 from __future__ import annotations
 
-from airsim_mapper.convert.entries.model import ACTION, CALL, POSE, ROS_TO_SIM, SEND, Example, converter_info
+from airsim_mapper.convert.entries.model import (
+    ACTION,
+    CALL,
+    DEFAULT_QOS,
+    POSE,
+    ROS_TO_SIM,
+    SEND,
+    Example,
+    converter_info,
+)
 
 # cmd_vel's params.frame, what the Twist's linear velocity is in (body, the default, first), with the
 # simulator method that takes a velocity in that frame
@@ -19,6 +28,7 @@ COMMANDS = (
         "cmd_vel",
         "Twist -> MoveByVelocityBodyFrame params (or MoveByVelocity with params.frame world), with "
         "limits and a watchdog",
+        qos=DEFAULT_QOS,
         param_choices={"frame": VELOCITY_FRAMES},  # the default first
         example=Example(
             {"linear": {"x": 1.0, "y": 0.0, "z": -0.5}, "angular": {"x": 0.0, "y": 0.0, "z": 0.2}}
@@ -32,6 +42,7 @@ COMMANDS = (
         "command",
         "desired_pose",
         "PoseStamped -> sim desired_pose message (robot teleport)",
+        qos=DEFAULT_QOS,
         example=Example({"pose": POSE}),
     ),
     converter_info(
@@ -42,6 +53,7 @@ COMMANDS = (
         "command",
         "camera_desired_pose",
         "PoseStamped -> camera SetPose params with wait_for_pose_update",
+        qos=DEFAULT_QOS,
         after="remember_camera_pose",
         example=Example({"pose": POSE}),
     ),
@@ -53,6 +65,7 @@ COMMANDS = (
         "command",
         "load_scene",
         "String scene file name -> the engine loads it from --simconfigpath",
+        qos=DEFAULT_QOS,
         action="load_scene",
         example=Example({"data": "scene_basic_drone.jsonc"}),
     ),

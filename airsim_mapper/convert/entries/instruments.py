@@ -3,7 +3,14 @@ distance sensor, battery and airspeed (all light, converted on the receive threa
 
 from __future__ import annotations
 
-from airsim_mapper.convert.entries.model import PUBLISH, SIM_TO_ROS, STAMP, Example, converter_info
+from airsim_mapper.convert.entries.model import (
+    PUBLISH,
+    SENSOR_DATA,
+    SIM_TO_ROS,
+    STAMP,
+    Example,
+    converter_info,
+)
 
 INSTRUMENTS = (
     converter_info(
@@ -14,6 +21,7 @@ INSTRUMENTS = (
         "clock",
         "clock",
         "any stamped sim message -> Clock at its sim time",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example(STAMP),
     ),
@@ -25,6 +33,7 @@ INSTRUMENTS = (
         "instruments",
         "imu",
         "sim IMU -> Imu",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example(
             {
@@ -43,6 +52,7 @@ INSTRUMENTS = (
         "instruments",
         "gps",
         "sim GPS -> NavSatFix",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example(
             {
@@ -64,6 +74,7 @@ INSTRUMENTS = (
         "instruments",
         "barometer",
         "sim Barometer -> FluidPressure (Pa)",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example({**STAMP, "pressure": 101325.0}),
     ),
@@ -75,6 +86,7 @@ INSTRUMENTS = (
         "instruments",
         "magnetometer",
         "sim Magnetometer (gauss) -> MagneticField (tesla)",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example(
             {
@@ -92,6 +104,7 @@ INSTRUMENTS = (
         "instruments",
         "distance",
         "sim DistanceSensor -> Range",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example({**STAMP, "current_distance": 3.0}),
     ),
@@ -103,6 +116,7 @@ INSTRUMENTS = (
         "instruments",
         "battery",
         "sim Battery -> BatteryState",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example(
             {**STAMP, "battery_pct_remaining": 50.0, "battery_charge_state": "BATTERY_CHARGE_STATE_OK"}
@@ -116,6 +130,7 @@ INSTRUMENTS = (
         "instruments",
         "airspeed",
         "sim Airspeed (differential pressure) -> FluidPressure (Pa)",
+        qos=SENSOR_DATA,
         inline=True,
         example=Example({**STAMP, "diff_pressure": 3.0}),
     ),

@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-from airsim_mapper.convert.entries.model import PUBLISH, SIM_TO_ROS, STAMP, Example, converter_info
+from airsim_mapper.convert.entries.model import (
+    PUBLISH,
+    SENSOR_DATA,
+    SIM_TO_ROS,
+    STAMP,
+    Example,
+    converter_info,
+)
 
 SCANS = (
     converter_info(
@@ -13,6 +20,7 @@ SCANS = (
         "pointcloud",
         "pointcloud",
         "sim Lidar -> PointCloud2 with x, y, z, intensity, segmentation",
+        qos=SENSOR_DATA,
         example=Example(
             {
                 **STAMP,
@@ -30,6 +38,7 @@ SCANS = (
         "radar",
         "radar_scan",
         "sim RadarDetection -> RadarScan (range, azimuth, elevation, doppler, amplitude dB from rcs)",
+        qos=SENSOR_DATA,
         example=Example(
             {
                 **STAMP,
@@ -47,6 +56,7 @@ SCANS = (
         "radar",
         "radar_tracks",
         "sim RadarTrack -> RadarTracks (uuid from id, position, velocity, acceleration)",
+        qos=SENSOR_DATA,
         example=Example(
             {
                 **STAMP,

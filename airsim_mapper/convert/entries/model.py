@@ -29,6 +29,14 @@ ACTIONS = ("load_scene",)
 # (image_types.FLOAT_IMAGE_TYPES); the expansion refuses a bridge of it on the other kind.
 COLOUR, FLOAT = "colour", "float"
 
+# The ROS 2 QoS profiles a rule's `qos` may name (their settings: mapping/qos.py); each entry's `qos` is
+# the one its bridges get unless the rule says otherwise
+SENSOR_DATA = "sensor_data"  # best-effort, volatile, small depth: streams where the newest sample matters
+DEFAULT_QOS = "default"  # reliable, volatile: state (poses, odometry) and commands
+TRANSIENT_LOCAL = "transient_local"  # reliable, transient-local, depth 1: latched topics
+SERVICES = "services"  # ROS services
+QOS_PROFILES = (SENSOR_DATA, DEFAULT_QOS, TRANSIENT_LOCAL, SERVICES)
+
 # Pieces of the example messages that several families share.
 STAMP = {"time_stamp": 1}
 POSE = {"position": {"x": 1.0, "y": 2.0, "z": 3.0}, "orientation": {"w": 1.0, "x": 0.0, "y": 0.0, "z": 0.0}}
@@ -64,6 +72,7 @@ class ConverterInfo:
     param_choices: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
     # the only images it can encode: COLOUR (8-bit) or FLOAT (depth) image types; None: any
     image_kind: str | None = None
+    qos: str = DEFAULT_QOS  # the QoS profile its bridges get on ROS 2 (one of QOS_PROFILES)
 
     @property
     def sim_kind(self) -> str:

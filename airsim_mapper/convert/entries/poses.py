@@ -3,7 +3,15 @@ the point where it collided (all light, converted on the receive thread)."""
 
 from __future__ import annotations
 
-from airsim_mapper.convert.entries.model import POSE, PUBLISH, SIM_TO_ROS, STAMP, Example, converter_info
+from airsim_mapper.convert.entries.model import (
+    DEFAULT_QOS,
+    POSE,
+    PUBLISH,
+    SIM_TO_ROS,
+    STAMP,
+    Example,
+    converter_info,
+)
 
 POSES = (
     converter_info(
@@ -14,6 +22,7 @@ POSES = (
         "pose",
         "robot_pose",
         "sim PoseStamped (robot actual_pose) -> PoseStamped; with tf, also the robot's transform",
+        qos=DEFAULT_QOS,
         inline=True,
         example=Example({**STAMP, **POSE}),
     ),
@@ -25,6 +34,7 @@ POSES = (
         "pose",
         "camera_pose",
         "robot actual_pose composed with the camera mount (and any camera pose command) -> camera pose",
+        qos=DEFAULT_QOS,
         inline=True,
         example=Example({**STAMP, **POSE}),
     ),
@@ -36,6 +46,7 @@ POSES = (
         "pose",
         "sensor_pose",
         "robot actual_pose composed with a sensor's config origin (lidar, radar, distance) -> its pose",
+        qos=DEFAULT_QOS,
         inline=True,
         example=Example({**STAMP, **POSE}),
     ),
@@ -47,6 +58,7 @@ POSES = (
         "pose",
         "camera_optical_pose",
         "as camera_pose, turned into the optical frame (z forward, x right, y down) for image frames",
+        qos=DEFAULT_QOS,
         inline=True,
         example=Example({**STAMP, **POSE}),
     ),
@@ -58,6 +70,7 @@ POSES = (
         "odometry",
         "odometry",
         "robot actual_pose -> Odometry; body-frame twist from successive poses (state in ctx.state)",
+        qos=DEFAULT_QOS,
         inline=True,
         example=Example({**STAMP, **POSE}),
     ),
@@ -69,6 +82,7 @@ POSES = (
         "collision",
         "collision",
         "sim CollisionInfo -> PointStamped of the impact point (world frame)",
+        qos=DEFAULT_QOS,
         inline=True,
         events=True,
         example=Example({**STAMP, "object_name": "x", "impact_point": {"x": 1.0, "y": 2.0, "z": 3.0}}),

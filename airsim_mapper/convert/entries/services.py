@@ -3,7 +3,14 @@ origin, a method on every robot, a bool parameter, and the streaming view switch
 
 from __future__ import annotations
 
-from airsim_mapper.convert.entries.model import ROS_TO_SIM, SERVE, SERVE_ALL, Example, converter_info
+from airsim_mapper.convert.entries.model import (
+    ROS_TO_SIM,
+    SERVE,
+    SERVE_ALL,
+    SERVICES,
+    Example,
+    converter_info,
+)
 
 ORIGIN = {"xyz": "1 2 -3", "rpy-deg": "0 0 90"}  # a robot actor's origin in a scene
 
@@ -16,6 +23,7 @@ SERVICES = (
         "command",
         "trigger",
         "service request -> sim service call with the rule's fixed params; reply from its result",
+        qos=SERVICES,
         example=Example({}),
     ),
     converter_info(
@@ -26,6 +34,7 @@ SERVICES = (
         "reset",
         "reset_pose",
         "service request -> robot SetPose params that return it to its scene origin, at rest",
+        qos=SERVICES,
         example=Example({}, source={"origin": ORIGIN}),
     ),
     converter_info(
@@ -36,6 +45,7 @@ SERVICES = (
         "command",
         "trigger",
         "Trigger -> the robot method params.method on every robot of the scene (sim: the robots prefix)",
+        qos=SERVICES,
         example=Example({}, params={"method": "Hover"}),
         required_params={"method": "the robot method to call on every robot (e.g. Hover)"},
     ),
@@ -47,6 +57,7 @@ SERVICES = (
         "command",
         "set_bool",
         "SetBool request -> sim service call with the bool as the rule's param",
+        qos=SERVICES,
         example=Example({"data": True}, params={"arg": "do_pause"}),
         required_params={"arg": "the simulator parameter that receives the bool (e.g. do_pause)"},
     ),
@@ -58,6 +69,7 @@ SERVICES = (
         "command",
         "trigger",
         "Trigger -> SwitchStreamingView, and the streaming image follows the next camera",
+        qos=SERVICES,
         after="next_streaming_camera",
         example=Example({}),
     ),
