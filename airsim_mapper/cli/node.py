@@ -174,12 +174,14 @@ def prepare_node(
     namespace: str,
     known: Prepared | None = None,
     node_namespace: str = "",
+    ros: int = 1,
 ) -> Prepared:
-    """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings)."""
+    """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings; names
+    checked against the rules of ROS `ros`)."""
     from airsim_mapper.mapping.pipeline import prepare
 
     sources = (settings["mapping"], settings["scene"], settings["simconfigpath"])
-    return prepare(*sources, node_name, namespace, known, node_namespace)
+    return prepare(*sources, node_name, namespace, known, node_namespace, ros)
 
 
 def config_problem(
@@ -188,10 +190,11 @@ def config_problem(
     namespace: str,
     known: Prepared | None = None,
     node_namespace: str = "",
+    ros: int = 1,
 ) -> tuple[Prepared | None, str | None]:
     """(prepared, None), or (None, what to print) when the mapping or scene is invalid."""
     try:
-        return prepare_node(settings, node_name, namespace, known, node_namespace), None
+        return prepare_node(settings, node_name, namespace, known, node_namespace, ros), None
     except ConfigError as exc:
         return None, str(exc)
     except OSError as exc:

@@ -116,7 +116,9 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
         settings = values(resolved)
         ros_name = node.get_fully_qualified_name()
         namespace = resolve_namespace(settings["namespace"], node.get_namespace())
-        prepared, problem = config_problem(settings, node.get_name(), namespace, None, node.get_namespace())
+        prepared, problem = config_problem(
+            settings, node.get_name(), namespace, None, node.get_namespace(), ros=2
+        )
         if problem:
             print(problem, file=sys.stderr)
             return 1

@@ -140,9 +140,8 @@ class Bridge:
 
 
 def rule_qos(spec: BridgeSpec) -> dict[str, Any]:
-    """The rule's QoS as the ROS link's keyword, on ROS 2 when the rule names one (ROS1 has no QoS)."""
-    qos = getattr(spec, "qos", None)
-    return {"qos": qos} if ROS2 and qos is not None else {}
+    """The bridge's QoS as the ROS link's keyword, on ROS 2 (ROS1 has no QoS)."""
+    return {"qos": spec.qos} if ROS2 else {}
 
 
 class SimToRos(Bridge):

@@ -1,8 +1,9 @@
 """The ROS link on ROS 2: the same face as `ros_link.RosLink` (publishers whose matched subscribers drive
 lazy streams, subscribers, services, the clock, batched /tf, /tf_static, tf lookup), over one rclpy node.
 
-QoS by message family unless the rule names one (`spec.qos`, when the mapping model has it): sensor streams
-best-effort with a small depth, latched topics and /tf_static transient-local depth 1, the rest reliable.
+QoS: each bridge's `spec.qos` (mapping/qos.py resolves it: the rule's, else its converter's profile), /tf and
+/tf_static as mapping/qos.py gives them; an endpoint without a spec (status, diagnostics) by message family:
+sensor streams best-effort with a small depth, latched topics transient-local depth 1, the rest reliable.
 There is no tf2_ros wheel: goals are moved between frames through the transforms this node itself sends.
 """
 
@@ -21,8 +22,18 @@ from airsim_mapper.common.geometry import q_conjugate, q_mul, q_normalized, q_ro
 from airsim_mapper.common.ros_types import generated_kind
 from airsim_mapper.engine.errors import EngineError, RosTypeError
 from airsim_mapper.engine.tf_poses import FrameUnknown, moved_pose, transform_from_pose
+from airsim_mapper.mapping.model import Qos
+from airsim_mapper.mapping.qos import TF_QOS, TF_STATIC_QOS
 
-__all__ = ["ClosedEndpoint", "FrameUnknown", "Ros2Link", "publish", "qos_for", "transform_from_pose"]
+__all__ = [
+    "ClosedEndpoint",
+    "FrameUnknown",
+    "Ros2Link",
+    "profile_of",
+    "publish",
+    "qos_for",
+    "transform_from_pose",
+]
 
 SENSOR_TYPES = frozenset(
     {
@@ -44,20 +55,6 @@ SENSOR_DEPTH = 5
 RELIABLE_DEPTH = 10
 FIRST_LOOKUP_S = 1.0  # the first goal in another frame waits this long for the node's own /tf
 LOOKUP_POLL_S = 0.05
-NAMED_PROFILES = {
-    "sensor_data": QoSProfile(
-        depth=SENSOR_DEPTH, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
-    ),
-    "default": QoSProfile(
-        depth=RELIABLE_DEPTH, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE
-    ),
-    "transient_local": QoSProfile(
-        depth=1,
-        history=HistoryPolicy.KEEP_LAST,
-        reliability=ReliabilityPolicy.RELIABLE,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL,
-    ),
-}
 
 
 class ClosedEndpoint(EngineError, RuntimeError):
@@ -96,32 +93,14 @@ def qos_for(ros_type: str, *, latch: bool = False, depth: int | None = None) -> 
     )
 
 
-def rule_profile(qos: Any, fallback: QoSProfile) -> QoSProfile:
-    """A mapping rule's QoS (a profile name, or a value with `reliability`, `durability`, `depth`,
-    `history`, each None for the default) over the family's `fallback`."""
-    if isinstance(qos, QoSProfile):
-        return qos
-    if isinstance(qos, str):
-        qos = NAMED_PROFILES.get(qos)
-        return fallback if qos is None else qos
-    out = QoSProfile(
-        depth=fallback.depth,
-        history=fallback.history,
-        reliability=fallback.reliability,
-        durability=fallback.durability,
+def profile_of(qos: Qos) -> QoSProfile:
+    """rclpy's QoSProfile of the mapping's concrete Qos."""
+    return QoSProfile(
+        depth=qos.depth,
+        history=HistoryPolicy[qos.history.upper()],
+        reliability=ReliabilityPolicy[qos.reliability.upper()],
+        durability=DurabilityPolicy[qos.durability.upper()],
     )
-    for name, policy in (
-        ("reliability", ReliabilityPolicy),
-        ("durability", DurabilityPolicy),
-        ("history", HistoryPolicy),
-    ):
-        value = getattr(qos, name, None)
-        if value is not None:
-            setattr(out, name, policy[str(value).upper()])
-    depth = getattr(qos, "depth", None)
-    if depth is not None:
-        out.depth = int(depth)
-    return out
 
 
 def publish(publisher: Any, message: Any) -> None:
@@ -231,8 +210,8 @@ class Ros2Link:
 
         self.node = node
         self._tf_message = TFMessage
-        self._tf = node.create_publisher(TFMessage, "/tf", qos_for("tf2_msgs/TFMessage"))
-        self._static_tf = node.create_publisher(TFMessage, "/tf_static", qos_for("", latch=True))
+        self._tf = node.create_publisher(TFMessage, "/tf", profile_of(TF_QOS))
+        self._static_tf = node.create_publisher(TFMessage, "/tf_static", profile_of(TF_STATIC_QOS))
         self._static: dict[str, Any] = {}
         self._static_lock = threading.Lock()
         self.frames = OwnFrames()
@@ -246,25 +225,27 @@ class Ros2Link:
         queue_size: int,
         latch: bool = False,
         on_peers: Callable[[], None] | None = None,
-        qos: Any = None,
+        qos: Qos | None = None,
     ) -> Publisher:
-        """A publisher of `ros_type` (QoS: the rule's over its family's default); `on_peers` runs whenever
-        a subscriber matches or leaves."""
+        """A publisher of `ros_type` with the bridge's `qos` (else its family's); `on_peers` runs whenever a
+        subscriber matches or leaves."""
         events = None
         if on_peers is not None:
             events = PublisherEventCallbacks(matched=lambda _info: on_peers())
-        profile = qos_for(ros_type, latch=latch, depth=queue_size)
-        if qos is not None:
-            profile = rule_profile(qos, profile)
+        profile = qos_for(ros_type, latch=latch, depth=queue_size) if qos is None else profile_of(qos)
         made = self.node.create_publisher(message_class(ros_type), name, profile, event_callbacks=events)
         return Publisher(self.node, made)
 
     def subscriber(
-        self, name: str, ros_type: str, callback: Callable[[Any], None], *, queue_size: int, qos: Any = None
+        self,
+        name: str,
+        ros_type: str,
+        callback: Callable[[Any], None],
+        *,
+        queue_size: int,
+        qos: Qos | None = None,
     ) -> Endpoint:
-        profile = qos_for(ros_type, depth=queue_size)
-        if qos is not None:
-            profile = rule_profile(qos, profile)
+        profile = qos_for(ros_type, depth=queue_size) if qos is None else profile_of(qos)
         made = self.node.create_subscription(message_class(ros_type), name, callback, profile)
         return Endpoint(lambda: self.node.destroy_subscription(made))
 
