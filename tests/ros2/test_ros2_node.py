@@ -157,3 +157,17 @@ def test_a_scene_named_on_load_scene_is_loaded_and_bridged(
     heard = listen(ros2_python, ros_domain, 60.0, f"say:{load_scene}=scene_basic_drone.jsonc", topics=topics)
     assert TOPICS["pose"][1] in heard["topics"], node.output()[-3000:]
     assert "SceneBasicDrone" in node.output()
+
+
+def test_a_name_ros2_refuses_stops_the_ros2_node_with_its_place(tmp_path: Path, ros_domain: int) -> None:
+    mapping = tmp_path / "m.yaml"
+    mapping.write_text(
+        "version: 1\nrules:\n  - name: pose\n    for_each: robot\n    direction: sim_to_ros\n"
+        "    converter: pose\n    sim: /Sim/<scene_name>/robots/<robot_name>/actual_pose\n"
+        "    ros: /x/<robot_name>/0pose\n    type: geometry_msgs/PoseStamped\n"
+    )
+    argv = [str(NODE), "--mapping", str(mapping), "--scene", "scene_drone_sensors.jsonc"]
+    argv += ["--simconfigpath", str(ROOT / "sim_config"), "--topicsport", "1", "--servicesport", "2"]
+    run = subprocess.run(argv, env=ros2_env(ros_domain), capture_output=True, text=True, timeout=60)
+    assert run.returncode == 1
+    assert f"{mapping}:8:10: " in run.stderr  # located, and before any connection to the simulator
