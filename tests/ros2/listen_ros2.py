@@ -4,7 +4,8 @@
 (best-effort, which also matches a reliable publisher; transient-local for /tf_static), publishes each TEXT
 once as a std_msgs/String on its TOPIC (once a subscriber is there), waits until every topic delivered or
 SECONDS passed, calls the std_srvs/Trigger services named, and prints one JSON line: per topic a summary of
-its first message, per service its response.
+its first message, per service its response. `TOPIC@reliable` subscribes reliably instead (reported under
+that name; it does not match a best-effort publisher).
 """
 
 from __future__ import annotations
@@ -66,7 +67,7 @@ def main(argv: list[str]) -> int:
     for type_name, topic in topics:
         durability = DurabilityPolicy.TRANSIENT_LOCAL if topic == "/tf_static" else DurabilityPolicy.VOLATILE
         qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT, durability=durability)
-        if topic == "/tf_static":
+        if topic == "/tf_static" or topic.endswith("@reliable"):
             qos.reliability = ReliabilityPolicy.RELIABLE
 
         def on_message(msg: object, topic: str = topic) -> None:
@@ -77,7 +78,7 @@ def main(argv: list[str]) -> int:
             elif topic not in got:
                 got[topic] = summary(msg)
 
-        node.create_subscription(message_type(type_name), topic, on_message, qos)
+        node.create_subscription(message_type(type_name), topic.removesuffix("@reliable"), on_message, qos)
     deadline = time.monotonic() + seconds
     if sayings:
         from std_msgs.msg import String

@@ -171,3 +171,26 @@ def test_a_name_ros2_refuses_stops_the_ros2_node_with_its_place(tmp_path: Path, 
     run = subprocess.run(argv, env=ros2_env(ros_domain), capture_output=True, text=True, timeout=60)
     assert run.returncode == 1
     assert f"{mapping}:8:10: " in run.stderr  # located, and before any connection to the simulator
+
+
+def test_qos_named_in_a_mapping_decides_which_subscribers_match(
+    launcher: Rig, ros2_python: Path, ros_domain: int, tmp_path: Path
+) -> None:
+    mapping = tmp_path / "reliable_images.yaml"
+    mapping.write_text("version: 1\nextends: default\nrules:\n  - {name: camera_image, qos: default}\n")
+    server = launcher.simserver()
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
+    argv = [str(NODE), *server.ports.args(), "--simconfigpath", str(ROOT / "sim_config")]
+    node = launcher.start(
+        "node_ros2", [*argv, "--scene", "scene_drone_sensors.jsonc", "--mapping", str(mapping)]
+    )
+    image, lidar = TOPICS["scene"], TOPICS["lidar"]
+    topics = {
+        "image reliable": (image[0], f"{image[1]}@reliable"),  # the rule's qos: default (reliable)
+        "image best effort": image,
+        "lidar best effort": lidar,  # the catalogue's sensor_data (best effort)
+        "lidar reliable": (lidar[0], f"{lidar[1]}@reliable"),  # does not match a best-effort publisher
+    }
+    heard = listen(ros2_python, ros_domain, 20.0, topics=topics)["topics"]
+    assert {f"{image[1]}@reliable", image[1], lidar[1]} <= heard.keys(), node.output()[-3000:]
+    assert f"{lidar[1]}@reliable" not in heard
