@@ -178,12 +178,27 @@ def start_engine(
     """Connect, make the engine on a ROS 2 link, start its node bridges and load the start scene; (engine,
     what went wrong or "")."""
     from airsim_mapper.common.tuning import keep_frame_buffers
-    from airsim_mapper.engine import Engine, FrameCounts, NodeNames, SimAccess, open_client
+    from airsim_mapper.engine import (
+        Engine,
+        FrameCounts,
+        NodeNames,
+        SimAccess,
+        SimSilent,
+        WaitingStatus,
+        open_client,
+    )
     from airsim_mapper.engine.ros2_link import Ros2Link
 
     keep_frame_buffers()
     address, topicsport, servicesport = (settings[k] for k in ("address", "topicsport", "servicesport"))
-    client = connect(address, topicsport, servicesport, stopping)
+    ros = Ros2Link(node)
+    waiting = WaitingStatus(ros_name, ros.publisher)
+    try:
+        client = connect(address, topicsport, servicesport, stopping, on_wait=waiting.publish)
+    except SimSilent as exc:
+        return None, str(exc)
+    finally:
+        waiting.close()
     if client is None:
         return None, ""
     engine = Engine(
@@ -193,7 +208,7 @@ def start_engine(
         SimAccess(
             settings["simconfigpath"], client_factory=partial(open_client, address, topicsport, servicesport)
         ),
-        ros=Ros2Link(node),
+        ros=ros,
         frame_counts=FrameCounts(max_frame_bytes=int(args.max_frame_mb * 1024 * 1024)),
         tune=True,
     )

@@ -36,6 +36,8 @@ def summary(msg: object) -> dict:
             out[name] = getattr(msg, name)
     if hasattr(msg, "data"):
         out["data_len"] = len(msg.data)
+        if isinstance(msg.data, str):
+            out["text"] = msg.data
     if hasattr(msg, "fields") and not isinstance(msg.fields, str):
         out["fields"] = [f.name for f in msg.fields]
     for name in ("k", "p", "d"):

@@ -194,3 +194,20 @@ def test_qos_named_in_a_mapping_decides_which_subscribers_match(
     heard = listen(ros2_python, ros_domain, 20.0, topics=topics)["topics"]
     assert {f"{image[1]}@reliable", image[1], lidar[1]} <= heard.keys(), node.output()[-3000:]
     assert f"{lidar[1]}@reliable" not in heard
+
+
+def test_while_the_simulator_is_not_there_the_status_says_connecting(
+    launcher: Rig, ros2_python: Path, ros_domain: int
+) -> None:
+    from harness import SimPorts
+
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
+    argv = [str(NODE), *SimPorts.free().args(), "--simconfigpath", str(ROOT / "sim_config")]
+    node = launcher.start("node_ros2", argv)  # nothing listens on those ports
+    topics = {"status": ("std_msgs/String", "/airsim_mapper/projectairsim/status")}
+    heard = listen(ros2_python, ros_domain, 30.0, topics=topics)["topics"]
+    assert "/airsim_mapper/projectairsim/status" in heard, node.output()[-3000:]
+    status = json.loads(heard["/airsim_mapper/projectairsim/status"]["text"])
+    assert status["state"] == "connecting" and status["attempts"] >= 1
+    node.popen.send_signal(signal.SIGINT)
+    assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
