@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import inspect
 import pkgutil
 
@@ -25,11 +26,17 @@ BASES = {
 }
 
 
+# Modules of one ROS flavour only, importable in that flavour's venv (tests/ros2 imports them there).
+ROS2_ONLY = frozenset({"airsim_mapper.engine.ros2_link"})
+OTHER_FLAVOUR = frozenset() if importlib.util.find_spec("rclpy") else ROS2_ONLY
+
+
 def defined_exceptions() -> list[type[BaseException]]:
-    """Every public exception class defined (not imported) by a module of the package."""
+    """Every public exception class defined (not imported) by a module of the package (of this venv's ROS
+    flavour)."""
     found = []
     for info in pkgutil.walk_packages(airsim_mapper.__path__, "airsim_mapper."):
-        if info.name.endswith("__main__"):
+        if info.name.endswith("__main__") or info.name in OTHER_FLAVOUR:
             continue
         module = importlib.import_module(info.name)
         found.extend(

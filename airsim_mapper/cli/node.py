@@ -56,7 +56,6 @@ __all__ = ["SETTINGS", "SettingError", "connect", "given_settings", "main", "par
 __all__ += ["run", "values"]
 
 log = ros_logger("airsim_mapper.node")
-ROS2_NOT_YET = "ROS 2: rclpy is here, but this version of the node runs on ROS1 only (--ros 1, from .venv)"
 WAITING_FOR_SCENE = "no --scene: waiting for a scene file name on"  # logged with the topic, once waiting
 
 
@@ -175,12 +174,14 @@ def prepare_node(
     namespace: str,
     known: Prepared | None = None,
     node_namespace: str = "",
+    ros: int = 1,
 ) -> Prepared:
-    """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings)."""
+    """The node's mapping and start scene (mapping/pipeline.py's `prepare` on the node's settings; names
+    checked against the rules of ROS `ros`)."""
     from airsim_mapper.mapping.pipeline import prepare
 
     sources = (settings["mapping"], settings["scene"], settings["simconfigpath"])
-    return prepare(*sources, node_name, namespace, known, node_namespace)
+    return prepare(*sources, node_name, namespace, known, node_namespace, ros)
 
 
 def config_problem(
@@ -189,10 +190,11 @@ def config_problem(
     namespace: str,
     known: Prepared | None = None,
     node_namespace: str = "",
+    ros: int = 1,
 ) -> tuple[Prepared | None, str | None]:
     """(prepared, None), or (None, what to print) when the mapping or scene is invalid."""
     try:
-        return prepare_node(settings, node_name, namespace, known, node_namespace), None
+        return prepare_node(settings, node_name, namespace, known, node_namespace, ros), None
     except ConfigError as exc:
         return None, str(exc)
     except OSError as exc:
@@ -232,8 +234,9 @@ def main(argv: list[str] | None = None, early_signals: list[int] | None = None) 
     argv = sys.argv if argv is None else argv
     try:
         if choose(requested(argv[1:])) == "2":
-            print(f"airsim-mapper-node: {ROS2_NOT_YET}", file=sys.stderr)
-            return 1
+            from airsim_mapper.cli import node_ros2
+
+            return node_ros2.main(argv, stop, parse_args, config_problem)
     except FlavourError as exc:
         print(f"airsim-mapper-node: {exc}", file=sys.stderr)
         return 1

@@ -4,8 +4,9 @@
 (`__all__`, the modules the layers above import): `catalog`, `registry`, `context` (ConvertContext),
 `errors`, the helpers the engine's runners share with the converters (`command.require_finite`,
 `pose.camera_pose_key`), `buffer_data` (the parts of a message sent apart, which the engine publishes),
-`transport_params` (image_transport's per-topic ROS parameters over a rule's params) and `rviz_radar`
-(radar scans as RViz markers, for `scripts/radar_markers.py`).
+`flavour` (which ROS's messages the converters build, decided at import), `transport_params`
+(image_transport's per-topic ROS parameters over a rule's params) and `rviz_radar` (radar scans as RViz
+markers, for `scripts/radar_markers.py`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ __all__ = [
     "command",
     "context",
     "errors",
+    "flavour",
     "pose",
     "registry",
     "rviz_radar",

@@ -58,3 +58,17 @@ def serialize_apart(message: Any, base: type, buff: Any, after: int = 0) -> tupl
         return (view,)
     buff.truncate()
     return view, rest
+
+
+def ros2_buffer_message(base: type) -> type:
+    """ROS 2's stand-in for a Buffer* class: called as the class is, it makes a message of the rosidl class
+    `base`, with ``data`` handed to rclpy as bytes (`flavour.byte_data`: one copy; rclpy's setter makes the
+    other)."""
+    from airsim_mapper.convert.flavour import byte_data
+
+    def __new__(cls: type, **fields: Any) -> Any:
+        if "data" in fields:
+            fields["data"] = byte_data(fields["data"])
+        return base(**fields)
+
+    return type(f"Buffer{base.__name__}", (), {"__new__": __new__, "__doc__": base.__doc__})

@@ -17,6 +17,7 @@ from sensor_msgs.msg import CameraInfo
 from airsim_mapper.convert import sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.flavour import camera_matrices
 from airsim_mapper.convert.stamps import sim_header
 
 DEFAULT_FOV_DEGREES = 90.0
@@ -60,8 +61,5 @@ def camera_info(msg: Mapping[str, Any], ctx: ConvertContext) -> CameraInfo:
         height=height,
         width=width,
         distortion_model=DISTORTION_MODEL,
-        D=list(d),
-        K=k,
-        R=r,
-        P=p,
+        **camera_matrices(d, k, r, p),
     )

@@ -23,4 +23,4 @@ def collision(msg: Mapping[str, Any], ctx: ConvertContext) -> PointStamped:
     point = sim_fields.vector3(msg, "impact_point")
     if ctx.enu:
         point = frames.ned_to_enu(point)
-    return PointStamped(header=sim_header(msg, ctx), point=Point(*(float(v) for v in point)))
+    return PointStamped(header=sim_header(msg, ctx), point=Point(**dict(zip("xyz", map(float, point)))))

@@ -20,9 +20,10 @@ from typing import Any
 from sensor_msgs.msg import CompressedImage
 
 from airsim_mapper.convert import sim_fields
-from airsim_mapper.convert.buffer_data import BufferData
+from airsim_mapper.convert.buffer_data import BufferData, ros2_buffer_message
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.convert.image import MAX_PIXELS, pixel_bytes, png_size
 from airsim_mapper.convert.stamps import sim_header
 
@@ -30,12 +31,16 @@ FORMAT = "bgr8; png compressed bgr8"  # compressed_image_transport's "<encoding>
 COMPRESSED = "PNG"  # the simulator's encoding of a compressed colour image
 
 
-class BufferCompressedImage(BufferData, CompressedImage):
-    """sensor_msgs/CompressedImage whose ``data`` may be any byte buffer (`buffer_data`)."""
+if ROS2:
+    BufferCompressedImage = ros2_buffer_message(CompressedImage)
+else:
 
-    __slots__ = CompressedImage.__slots__
-    _slot_types = CompressedImage._slot_types
-    _genpy_class = CompressedImage
+    class BufferCompressedImage(BufferData, CompressedImage):
+        """sensor_msgs/CompressedImage whose ``data`` may be any byte buffer (`buffer_data`)."""
+
+        __slots__ = CompressedImage.__slots__
+        _slot_types = CompressedImage._slot_types
+        _genpy_class = CompressedImage
 
 
 @sim_fields.converter("compressed_image")

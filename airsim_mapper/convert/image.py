@@ -29,9 +29,10 @@ import numpy as np
 from sensor_msgs.msg import Image
 
 from airsim_mapper.convert import sim_fields
-from airsim_mapper.convert.buffer_data import BufferData
+from airsim_mapper.convert.buffer_data import BufferData, ros2_buffer_message
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.convert.stamps import sim_header
 
 
@@ -57,13 +58,17 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PNG_IHDR = struct.Struct(">I4sII")  # the first chunk: length, b"IHDR", width, height
 
 
-class BufferImage(BufferData, Image):
-    """sensor_msgs/Image whose ``data`` may be any byte buffer (`buffer_data`): the pixels are written as
-    they are, or sent from where they are."""
+if ROS2:
+    BufferImage = ros2_buffer_message(Image)
+else:
 
-    __slots__ = Image.__slots__  # genpy validates keyword fields against the class's own __slots__
-    _slot_types = Image._slot_types
-    _genpy_class = Image
+    class BufferImage(BufferData, Image):
+        """sensor_msgs/Image whose ``data`` may be any byte buffer (`buffer_data`): the pixels are written as
+        they are, or sent from where they are."""
+
+        __slots__ = Image.__slots__  # genpy validates keyword fields against the class's own __slots__
+        _slot_types = Image._slot_types
+        _genpy_class = Image
 
 
 def as_bytes_view(array: np.ndarray) -> memoryview:

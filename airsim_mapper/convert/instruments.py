@@ -64,7 +64,8 @@ def diagonal_covariance(variance: Any, where: str) -> list[float]:
 
 
 def _vector(values: np.ndarray) -> Vector3:
-    return Vector3(*(float(v) for v in values))
+    x, y, z = (float(v) for v in values)
+    return Vector3(x=x, y=y, z=z)
 
 
 def _body(values: np.ndarray, ctx: ConvertContext) -> np.ndarray:
@@ -83,7 +84,9 @@ def imu(msg: Mapping[str, Any], ctx: ConvertContext) -> Imu:
     w, x, y, z = (float(v) for v in q)
     return Imu(
         header=sim_header(msg, ctx),
-        orientation=Quaternion(x, y, z, w) if has_orientation else Quaternion(0.0, 0.0, 0.0, 0.0),
+        orientation=Quaternion(x=x, y=y, z=z, w=w)
+        if has_orientation
+        else Quaternion(x=0.0, y=0.0, z=0.0, w=0.0),
         orientation_covariance=(
             diagonal_covariance(ctx.params.get("orientation_variance"), "orientation_variance")
             if has_orientation

@@ -24,6 +24,7 @@ from airsim_mapper.common.geometry import Quat, Vec3, q_conjugate, q_mul, q_norm
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.flavour import stamp_parts
 from airsim_mapper.convert.pose import ros_pose
 from airsim_mapper.convert.stamps import sim_header, sim_stamp
 
@@ -71,11 +72,17 @@ def child_frame(ctx: ConvertContext) -> str:
     return text
 
 
+def vector(xyz: tuple[float, ...]) -> Vector3:
+    x, y, z = xyz
+    return Vector3(x=float(x), y=float(y), z=float(z))
+
+
 @sim_fields.converter("odometry")
 def odometry(msg: Mapping[str, Any], ctx: ConvertContext) -> Odometry:
     """sim PoseStamped (robot actual_pose) -> Odometry with the pose and a finite-difference twist."""
     position, q = sim_fields.pose(msg)
-    t_ns = sim_stamp(msg).to_nsec()
+    secs, nsecs = stamp_parts(sim_stamp(msg))
+    t_ns = secs * 1_000_000_000 + nsecs
     if ctx.enu:
         position, q = frames.ned_to_enu(position), frames.ned_frd_to_enu_flu(q)
     position, q = tuple(map(float, position)), q_normalized(q)
@@ -89,5 +96,5 @@ def odometry(msg: Mapping[str, Any], ctx: ConvertContext) -> Odometry:
     ctx.state[ODOMETRY_KEY] = PoseSample(t_ns, position, q, linear, angular)
     out = Odometry(header=sim_header(msg, ctx), child_frame_id=child)
     out.pose.pose = ros_pose(position, q)
-    out.twist.twist = Twist(Vector3(*linear), Vector3(*angular))
+    out.twist.twist = Twist(linear=vector(linear), angular=vector(angular))
     return out

@@ -17,9 +17,10 @@ import numpy as np
 from sensor_msgs.msg import PointCloud2, PointField
 
 from airsim_mapper.convert import sim_fields
-from airsim_mapper.convert.buffer_data import BufferData
+from airsim_mapper.convert.buffer_data import BufferData, ros2_buffer_message
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.convert.stamps import sim_header
 
 POINT_DTYPE = np.dtype(
@@ -29,14 +30,18 @@ _ROS_TYPES = {np.dtype("<f4"): PointField.FLOAT32, np.dtype("<i4"): PointField.I
 _ARRAY_CODES = {"<f4": ("f", np.float32), "<i4": ("i", np.intc)}  # array.array packs lists faster
 
 
-class BufferPointCloud2(BufferData, PointCloud2):
-    """sensor_msgs/PointCloud2 whose ``data`` may be any byte buffer (`buffer_data`); ``is_dense`` (one
-    byte) follows it."""
+if ROS2:
+    BufferPointCloud2 = ros2_buffer_message(PointCloud2)
+else:
 
-    __slots__ = PointCloud2.__slots__
-    _slot_types = PointCloud2._slot_types
-    _genpy_class = PointCloud2
-    _after_data = 1
+    class BufferPointCloud2(BufferData, PointCloud2):
+        """sensor_msgs/PointCloud2 whose ``data`` may be any byte buffer (`buffer_data`); ``is_dense`` (one
+        byte) follows it."""
+
+        __slots__ = PointCloud2.__slots__
+        _slot_types = PointCloud2._slot_types
+        _genpy_class = PointCloud2
+        _after_data = 1
 
 
 def point_fields() -> list[PointField]:

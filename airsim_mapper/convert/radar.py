@@ -22,12 +22,24 @@ from typing import Any
 import numpy as np
 from geometry_msgs.msg import Point, Vector3
 from radar_msgs.msg import RadarReturn, RadarScan, RadarTrack, RadarTracks
-from uuid_msgs.msg import UniqueID
 
 from airsim_mapper.convert import frames, sim_fields
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.convert.stamps import sim_header
+
+if ROS2:  # a track's id is unique_identifier_msgs/UUID, a uint8[16] that takes a list of ints
+    from unique_identifier_msgs.msg import UUID as UniqueID
+
+    def _uuid_bytes(raw: bytes) -> Any:
+        return list(raw)
+else:
+    from uuid_msgs.msg import UniqueID
+
+    def _uuid_bytes(raw: bytes) -> Any:
+        return raw
+
 
 RCS_FLOOR_SQM = 1e-10
 AMPLITUDE_FLOOR_DB = -100.0
@@ -70,7 +82,10 @@ def radar_scan(msg: Mapping[str, Any], ctx: ConvertContext) -> RadarScan:
         azimuth = -azimuth
     amplitude = amplitude_db(rcs)
     rows = np.column_stack([rng, azimuth, elevation, velocity, amplitude]).tolist()
-    returns = [RadarReturn(r, a, e, v, amp) for r, a, e, v, amp in rows]
+    returns = [
+        RadarReturn(range=r, azimuth=a, elevation=e, doppler_velocity=v, amplitude=amp)
+        for r, a, e, v, amp in rows
+    ]
     return RadarScan(header=sim_header(msg, ctx), returns=returns)
 
 
@@ -79,7 +94,7 @@ def track_uuid(track_id: Any) -> UniqueID:
     value = sim_fields.integer(track_id, "radar_tracks: id")
     if not _INT64[0] <= value <= _INT64[1]:
         raise ConversionError(f"radar_tracks: id {value} does not fit in 64 bits")
-    return UniqueID(uuid=bytes(8) + value.to_bytes(8, "big", signed=True))
+    return UniqueID(uuid=_uuid_bytes(bytes(8) + value.to_bytes(8, "big", signed=True)))
 
 
 def _vectors(tracks: list[Any], key: str) -> np.ndarray:
@@ -113,10 +128,10 @@ def radar_tracks(msg: Mapping[str, Any], ctx: ConvertContext) -> RadarTracks:
     out = [
         RadarTrack(
             uuid=uid,
-            position=Point(*p),
-            velocity=Vector3(*v),
-            acceleration=Vector3(*a),
-            size=Vector3(0.0, 0.0, 0.0),
+            position=Point(x=p[0], y=p[1], z=p[2]),
+            velocity=Vector3(x=v[0], y=v[1], z=v[2]),
+            acceleration=Vector3(x=a[0], y=a[1], z=a[2]),
+            size=Vector3(x=0.0, y=0.0, z=0.0),
             classification=RadarTrack.NO_CLASSIFICATION,
             position_covariance=_diagonal(variances["position"]),
             velocity_covariance=_diagonal(variances["velocity"]),

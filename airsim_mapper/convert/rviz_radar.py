@@ -84,10 +84,11 @@ def scan_table(scan: Any) -> np.ndarray:
 def scan_markers(scan: Any, convention: str = "frd", style: MarkerStyle | None = None) -> Any:
     """A visualization_msgs/MarkerArray with one SPHERE_LIST marker of the scan's returns (returns with a
     non-finite range, azimuth or elevation are left out)."""
-    import genpy
     from geometry_msgs.msg import Point
     from std_msgs.msg import ColorRGBA
     from visualization_msgs.msg import Marker, MarkerArray
+
+    from airsim_mapper.convert.flavour import duration
 
     style = style or MarkerStyle()
     table = scan_table(scan)
@@ -101,8 +102,8 @@ def scan_markers(scan: Any, convention: str = "frd", style: MarkerStyle | None =
     marker.action = Marker.ADD
     marker.pose.orientation.w = 1.0
     marker.scale.x = marker.scale.y = marker.scale.z = style.diameter_m
-    marker.color = ColorRGBA(*WEAK_RGBA)
-    marker.lifetime = genpy.Duration.from_sec(style.lifetime_s)
-    marker.points = [Point(*p) for p in xyz.tolist()]
-    marker.colors = [ColorRGBA(*c) for c in amplitude_colors(table[:, 4]).tolist()]
+    marker.color = ColorRGBA(**dict(zip("rgba", map(float, WEAK_RGBA))))
+    marker.lifetime = duration(style.lifetime_s)
+    marker.points = [Point(x=x, y=y, z=z) for x, y, z in xyz.tolist()]
+    marker.colors = [ColorRGBA(r=r, g=g, b=b, a=a) for r, g, b, a in amplitude_colors(table[:, 4]).tolist()]
     return MarkerArray(markers=[marker])

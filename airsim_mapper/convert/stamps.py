@@ -6,12 +6,12 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from genpy import Time
 from std_msgs.msg import Header
 
 from airsim_mapper.convert import messages
 from airsim_mapper.convert.context import STAMP_ROS, ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.flavour import Time
 
 NS_PER_S = 1_000_000_000
 MAX_STAMP_NS = (2**32) * NS_PER_S - 1  # ROS1 time seconds are uint32

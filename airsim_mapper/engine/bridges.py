@@ -23,16 +23,22 @@ from airsim_mapper.common.logs import RateLimitedLog, ros_logger, shorten
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError, OversizedData
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.convert.pose import camera_pose_key
 from airsim_mapper.convert.transport_params import overridden
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
-from airsim_mapper.engine.publish import publish
 from airsim_mapper.engine.replays import LatchedReplays
-from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 from airsim_mapper.engine.sim_link import FrameCounts, SimLink
 from airsim_mapper.engine.simtime import SimTimeWatch
 from airsim_mapper.mapping.model import BridgeSpec
+
+if ROS2:
+    from airsim_mapper.engine.ros2_link import ClosedEndpoint, publish, transform_from_pose
+    from airsim_mapper.engine.ros2_link import Ros2Link as RosLink
+else:
+    from airsim_mapper.engine.publish import publish
+    from airsim_mapper.engine.ros_link import ClosedEndpoint, RosLink, transform_from_pose
 
 log = ros_logger("airsim_mapper.bridge")
 WARN_PERIOD_S = 5.0
@@ -145,6 +151,11 @@ class Bridge:
         self.fail(f"{what}: {type(exc).__name__}: {exc}", exc)
 
 
+def rule_qos(spec: BridgeSpec) -> dict[str, Any]:
+    """The bridge's QoS as the ROS link's keyword, on ROS 2 (ROS1 has no QoS)."""
+    return {"qos": spec.qos} if ROS2 else {}
+
+
 class SimToRos(Bridge):
     """Sim topic -> converter -> ROS publisher (and/or tf). Lazy bridges follow their ROS subscribers."""
 
@@ -177,6 +188,7 @@ class SimToRos(Bridge):
                 queue_size=spec.options.queue_size,
                 latch=spec.options.latch,
                 on_peers=self._peers_changed if self.lazy else None,
+                **rule_qos(spec),
             )
         if self.lazy:
             self._peers_changed()

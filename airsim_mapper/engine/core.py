@@ -20,12 +20,11 @@ from collections.abc import Callable
 from typing import Any
 
 from airsim_mapper.common.logs import RateLimitedLog, ros_logger
-from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, BridgeParts, SimToRos
+from airsim_mapper.engine.bridges import WARN_PERIOD_S, Bridge, BridgeParts, RosLink, SimToRos
 from airsim_mapper.engine.hub import StreamHub
 from airsim_mapper.engine.mounts import CameraMounts
 from airsim_mapper.engine.node_setup import NodeNames, SimAccess
 from airsim_mapper.engine.process_tuning import GcPauses, freeze_heap, thaw_heap, tune_process
-from airsim_mapper.engine.ros_link import RosLink
 from airsim_mapper.engine.ros_to_sim import RosToSim
 from airsim_mapper.engine.runners import build
 from airsim_mapper.engine.scene_requests import SceneRequests

@@ -89,16 +89,14 @@ def refused_status(name: str, why: str, prefix: str) -> dict[str, Any]:
 
 
 class Diagnostics:
-    """Publishes the engine's bridge statistics on /diagnostics from `start` until stopped."""
+    """Publishes the engine's bridge statistics on /diagnostics from `start` until stopped, through the
+    engine's ROS link (either flavour)."""
 
     def __init__(self, engine: Any, node_name: str, period_s: float = 1.0) -> None:
-        import rospy
-        from diagnostic_msgs.msg import DiagnosticArray
-
         self.engine = engine
         self.prefix = f"{node_name.strip('/')}: "
         self.period_s = period_s
-        self.publisher = rospy.Publisher("/diagnostics", DiagnosticArray, queue_size=1)
+        self.publisher = engine.ros.publisher("/diagnostics", "diagnostic_msgs/DiagnosticArray", queue_size=1)
         self._seen: dict[str, _Seen] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="diagnostics", daemon=True)
@@ -164,14 +162,13 @@ class Diagnostics:
     def publish(self) -> None:
         """One report; while nobody subscribes, only the counts its rates start from (rospy would drop
         the message, and with thousands of bridges building it took a tenth of a core)."""
-        import rospy
         from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
         if self.publisher.get_num_connections() == 0:
             self._note(list(self.engine.bridges.items()), time.monotonic())
             return
         array = DiagnosticArray()
-        array.header.stamp = rospy.Time.now()
+        array.header.stamp = self.engine.ros.now()
         for status in self.statuses(time.monotonic()):
             array.status.append(
                 DiagnosticStatus(

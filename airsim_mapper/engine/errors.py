@@ -4,11 +4,15 @@ from __future__ import annotations
 
 from airsim_mapper.common.errors import AirsimMapperError
 
-__all__ = ["EngineError", "InternalsChanged"]
+__all__ = ["EngineError", "InternalsChanged", "RosTypeError"]
 
 
 class EngineError(AirsimMapperError, RuntimeError):
     """The engine cannot do what was asked right now (the message says why); the engine layer's base."""
+
+
+class RosTypeError(EngineError, LookupError):
+    """A ROS message or service type could not be imported."""
 
 
 class InternalsChanged(EngineError):

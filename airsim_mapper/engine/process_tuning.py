@@ -16,7 +16,7 @@ import gc
 import time
 
 from airsim_mapper.common.tuning import tune_threads
-from airsim_mapper.engine.rospy_internals import publish_promptly, watch_connections_without_a_file
+from airsim_mapper.convert.flavour import ROS2
 
 
 def tune_process() -> None:
@@ -25,6 +25,11 @@ def tune_process() -> None:
     The node applies them; a mission script's wrapper only with `tune_process=True`. rospy's topics also
     watch their connections without an open file of their own (`ConnectionPoll`): with the heap frozen,
     the one rospy makes would outlive every topic."""
+    if ROS2:
+        tune_threads()
+        return
+    from airsim_mapper.engine.rospy_internals import publish_promptly, watch_connections_without_a_file
+
     watch_connections_without_a_file()
     if tune_threads():
         publish_promptly()

@@ -12,17 +12,14 @@ import rospy
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
 
-from airsim_mapper.common.logs import shorten
 from airsim_mapper.common.ros_types import generated_kind
-from airsim_mapper.engine.errors import EngineError
+from airsim_mapper.engine.errors import RosTypeError
 from airsim_mapper.engine.rospy_internals import widen_accept_backlog
+from airsim_mapper.engine.tf_poses import FrameUnknown, moved_pose, transform_from_pose
 
+__all__ = ["FrameUnknown", "RosLink", "message_class", "moved_pose", "publisher", "transform_from_pose"]
 CLEAR_AGAIN_S = 1.0  # tf's buffer is cleared once more this long after a jump back in time
 ClosedEndpoint = rospy.ROSException  # what `publish` raises on a publisher a concurrent stop unregistered
-
-
-class RosTypeError(EngineError, LookupError):
-    """A ROS message or service type could not be imported."""
 
 
 def message_class(ros_type: str, kind: str = "msg") -> type:
@@ -176,28 +173,6 @@ class RosLink:
         self.frames.close()
 
 
-def transform_from_pose(pose_stamped: Any, parent: str, child: str) -> TransformStamped:
-    """A TransformStamped parent -> child from a geometry_msgs/PoseStamped (same stamp)."""
-    t = TransformStamped()
-    t.header.stamp = pose_stamped.header.stamp
-    t.header.frame_id = parent
-    t.child_frame_id = child
-    p, q = pose_stamped.pose.position, pose_stamped.pose.orientation
-    t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = p.x, p.y, p.z
-    t.transform.rotation.x, t.transform.rotation.y = q.x, q.y
-    t.transform.rotation.z, t.transform.rotation.w = q.z, q.w
-    return t
-
-
-class FrameUnknown(EngineError, LookupError):
-    """tf cannot transform a message's frame into the frame a command needs."""
-
-    def __init__(self, source: str, target: str, why: str) -> None:
-        super().__init__(
-            f"frame {shorten(source)!r} cannot be transformed into {shorten(target)!r} with tf: {why}"
-        )
-
-
 class TfLookup:
     """Transforms poses between tf frames. The tf listener is made on first use: a node whose goals all
     come in the world frame never subscribes to /tf."""
@@ -251,24 +226,3 @@ class TfLookup:
             if self._listener is not None:
                 self._listener.unregister()
             self._listener = self._buffer = None
-
-
-def moved_pose(pose_stamped: Any, transform: TransformStamped) -> Any:
-    """`pose_stamped` expressed in the transform's parent frame. The pose's quaternion is composed as it is
-    (not normalised), so a zero, non-unit or non-finite goal is still refused by the converter's checks."""
-    from geometry_msgs.msg import PoseStamped
-
-    from airsim_mapper.common.geometry import q_mul, q_normalized, q_rotate
-
-    t, r = transform.transform.translation, transform.transform.rotation
-    rotation = q_normalized((r.w, r.x, r.y, r.z))
-    p, q = pose_stamped.pose.position, pose_stamped.pose.orientation
-    x, y, z = q_rotate(rotation, (p.x, p.y, p.z))
-    w, qx, qy, qz = q_mul(rotation, (q.w, q.x, q.y, q.z))
-    out = PoseStamped()
-    out.header.seq, out.header.stamp = pose_stamped.header.seq, pose_stamped.header.stamp
-    out.header.frame_id = transform.header.frame_id
-    out.pose.position.x, out.pose.position.y, out.pose.position.z = x + t.x, y + t.y, z + t.z
-    o = out.pose.orientation
-    o.w, o.x, o.y, o.z = w, qx, qy, qz
-    return out

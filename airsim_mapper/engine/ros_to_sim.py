@@ -12,10 +12,10 @@ from airsim_mapper.common.logs import ros_logger
 from airsim_mapper.convert import catalog, registry
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.errors import ConversionError
-from airsim_mapper.engine.bridges import Bridge, BridgeParts, _accepted
+from airsim_mapper.engine.bridges import Bridge, BridgeParts, _accepted, rule_qos
 from airsim_mapper.engine.replays import LatchedReplays, connection_header
-from airsim_mapper.engine.ros_link import FrameUnknown
 from airsim_mapper.engine.sim_link import SimLinkError
+from airsim_mapper.engine.tf_poses import FrameUnknown
 from airsim_mapper.mapping.model import BridgeSpec
 
 __all__ = ["RosService", "RosToSim"]
@@ -44,7 +44,11 @@ class RosToSim(Bridge):
 
     def start(self) -> None:
         self.subscriber = self.parts.ros.subscriber(
-            self.spec.ros, self.spec.ros_type, self.on_message, queue_size=self.spec.options.queue_size
+            self.spec.ros,
+            self.spec.ros_type,
+            self.on_message,
+            queue_size=self.spec.options.queue_size,
+            **rule_qos(self.spec),
         )
 
     def on_message(self, ros_msg: Any) -> None:

@@ -55,15 +55,18 @@ class WaitingStatus:
     """The status topic while the node waits for its first connection to the simulator: state "connecting",
     why, and the attempts so far (made on the first wait; the engine's own status follows it)."""
 
-    def __init__(self, ros_name: str) -> None:
+    def __init__(self, ros_name: str, make_publisher: Callable[..., Any] | None = None) -> None:
+        """`make_publisher` is a ROS link's `publisher` (ROS1's `ros_link.publisher` when None)."""
         self.ros_name = ros_name
+        self._make_publisher = make_publisher
         self._status: Any = None
 
     def publish(self, reason: str, attempts: int) -> None:
-        from airsim_mapper.engine.ros_link import publisher
-
         if self._status is None:
-            self._status = StatusPublisher(publisher, self.ros_name)
+            make = self._make_publisher
+            if make is None:
+                from airsim_mapper.engine.ros_link import publisher as make
+            self._status = StatusPublisher(make, self.ros_name)
         self._status.publish({"state": CONNECTING, "reason": reason, "attempts": attempts, "scene": ""})
 
     def close(self) -> None:

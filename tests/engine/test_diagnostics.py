@@ -65,7 +65,6 @@ def test_nothing_is_built_while_nobody_subscribes_and_the_next_rate_starts_from_
 
     clock = iter([10.0, 12.0])
     monkeypatch.setattr(module.time, "monotonic", lambda: next(clock))
-    monkeypatch.setattr(rospy.Time, "now", staticmethod(lambda: rospy.Time(1)))
     bridge = SimpleNamespace(
         stats=SimpleNamespace(messages=0, errors=0, last_time=0.0, last_error="", stale_dropped=0, clamped=0),
         spec=SimpleNamespace(direction="sim_to_ros", sim="/s", ros="/r", name="imu", converter="imu"),
@@ -73,6 +72,7 @@ def test_nothing_is_built_while_nobody_subscribes_and_the_next_rate_starts_from_
     )
     made = diagnostics(hub=SimpleNamespace(streams=dict))
     made.engine.bridges = {"imu": bridge}
+    made.engine.ros = SimpleNamespace(now=lambda: rospy.Time(1))  # the engine's ROS link's clock
     made._seen = {}
     made.publisher = Publisher(connections=0)
     bridge.stats.messages = 500  # before the skipped report (t = 10 s): not in the next rate

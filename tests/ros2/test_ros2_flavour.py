@@ -39,7 +39,6 @@ def test_a_flavour_asked_for_whose_library_is_missing_names_make_setup():
     [
         (ROOT / ".venv" / "bin" / "python", ["--ros", "2"], "ROS 2: rclpy is not importable"),
         (ROS2_PYTHON, ["--ros", "1"], "ROS1: rospy is not importable"),
-        (ROS2_PYTHON, [], "runs on ROS1 only"),
     ],
 )
 def test_the_node_refuses_a_flavour_it_cannot_run_before_it_starts(python, argv, message):
