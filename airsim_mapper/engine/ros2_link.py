@@ -257,6 +257,14 @@ class Ros2Link:
     def now(self) -> Any:
         return self.node.get_clock().now().to_msg()
 
+    def param(self, name: str) -> Any:
+        """The node's parameter for the ROS1 name `name` (slashes as dots, as ROS 2 names parameters: `-p
+        airsim_node.Drone1.cam.scene_camera.compressed.jpeg_quality:=50`), None when it is not set."""
+        dotted = name.strip("/").replace("/", ".")
+        if not self.node.has_parameter(dotted):
+            return None
+        return self.node.get_parameter(dotted).value
+
     def send_tf(self, transforms: list[Any]) -> None:
         if transforms:
             if self._lookups:
