@@ -31,7 +31,16 @@ def summary(msg: object) -> dict:
     if header is not None:
         out["frame_id"] = header.frame_id
         out["stamp"] = [header.stamp.sec, header.stamp.nanosec]
-    for name in ("height", "width", "encoding", "step", "point_step", "row_step", "distortion_model"):
+    for name in (
+        "height",
+        "width",
+        "encoding",
+        "format",
+        "step",
+        "point_step",
+        "row_step",
+        "distortion_model",
+    ):
         if hasattr(msg, name):
             out[name] = getattr(msg, name)
     if hasattr(msg, "data"):

@@ -24,6 +24,11 @@ TOPICS = {
     "scene": ("sensor_msgs/Image", f"{DRONE}/DownCamera/scene_camera/image"),
     "depth": ("sensor_msgs/Image", f"{DRONE}/DownCamera/depth_planar_camera/image"),
     "info": ("sensor_msgs/CameraInfo", f"{DRONE}/DownCamera/scene_camera/camera_info"),
+    "jpeg": ("sensor_msgs/CompressedImage", f"{DRONE}/DownCamera/scene_camera/image/compressed"),
+    "depth_png": (
+        "sensor_msgs/CompressedImage",
+        f"{DRONE}/DownCamera/depth_planar_camera/image/compressedDepth",
+    ),
     "lidar": ("sensor_msgs/PointCloud2", f"{DRONE}/lidar1/lidar"),
     "radar": ("radar_msgs/RadarScan", f"{DRONE}/radar1/radar_detections"),
     "tf": ("tf2_msgs/TFMessage", "/tf"),
@@ -71,6 +76,9 @@ def test_the_ros2_node_bridges_the_default_mapping_and_stops_on_sigint(
     depth = topics[TOPICS["depth"][1]]
     assert (depth["encoding"], depth["data_len"]) == ("32FC1", 320 * 240 * 4)
 
+    jpeg, depth_png = topics[TOPICS["jpeg"][1]], topics[TOPICS["depth_png"][1]]
+    assert jpeg["format"] == "bgr8; jpeg compressed bgr8" and 0 < jpeg["data_len"] < 320 * 240 * 3
+    assert depth_png["format"] == "32FC1; compressedDepth png" and depth_png["data_len"] > 12 + 8
     info = topics[TOPICS["info"][1]]
     f = info["k"][0]
     assert info["k"] == [f, 0.0, 160.0, 0.0, f, 120.0, 0.0, 0.0, 1.0]
