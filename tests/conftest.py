@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Generator, Iterator
 from pathlib import Path
 
 import pytest
 from harness import Rig, RosMaster
 from simconfigs import PROJECT, config_dir, fold_example_skips, require_example_config
+
+# Started as a background job of a non-interactive shell, the suite inherits SIGINT ignored, and so would
+# every process it starts (an ignored signal stays ignored across exec): the tests that stop a node or a
+# mission script with Ctrl-C need it delivered, so the suite takes Python's own handler back.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 # The fixtures that start real processes; a test that uses one, directly or through another fixture, is
 # `live` (`make check` leaves it out). Tests that start processes some other way carry the marker themselves.
