@@ -61,10 +61,16 @@ class WrapperError(AirsimMapperError, RuntimeError):
     """The wrapper cannot do what was asked (the message says why)."""
 
 
-def redirect_client_log() -> None:
+def redirect_client_log(node: Any = None) -> None:
     """Send the projectairsim client's log records to `rosout.projectairsim` (console and /rosout), as far
-    as that logger's level lets them through."""
+    as that logger's level lets them through. On ROS 2 give the script's rclpy node: the `rosout.*` records
+    go to its logger from now on (call this before the client connects, so its first lines get there)."""
     from projectairsim.utils import projectairsim_log
+
+    if node is not None:
+        from airsim_mapper.engine.ros2_node import log_to
+
+        log_to(node)
 
     client_log = caller_logger(projectairsim_log())  # its records name their caller on /rosout too
     if any(getattr(f, "airsim_mapper", False) for f in client_log.filters):
@@ -119,12 +125,13 @@ class Ros2Node:
         import rclpy
 
         from airsim_mapper.engine.ros2_link import Ros2Link
-        from airsim_mapper.engine.ros2_node import Spinner
+        from airsim_mapper.engine.ros2_node import Spinner, log_to
 
         self._made = node is None
         self.node = rclpy.create_node(node_name or DEFAULT_NODE_NAME) if node is None else node
         self.name, self.namespace = self.node.get_fully_qualified_name(), self.node.get_namespace()
         self.link = Ros2Link(self.node)
+        self._log = log_to(self.node)
         self._spinner = Spinner(self.node)
         self._spinner.start()
 
@@ -135,10 +142,13 @@ class Ros2Node:
         """Before the bridges stop: the node spins on, so that what they log still reaches /rosout."""
 
     def close(self) -> None:
-        """After the bridges stopped: the executor, and the node if it was made here. A script's node keeps
-        the log (what the script and its client log later still reach it)."""
-        self._spinner.stop(keep_log=not self._made)
+        """After the bridges stopped: the executor, and the node and its log if the node was made here. A
+        script's node keeps the log (what the script and its client log later still reach it)."""
+        from airsim_mapper.engine.ros2_node import ROSOUT_LOGGER
+
+        self._spinner.stop()
         if self._made:
+            logging.getLogger(ROSOUT_LOGGER).removeHandler(self._log)
             self.node.destroy_node()
 
 

@@ -57,7 +57,7 @@ def run(argv: list[str]) -> int:
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)  # the script stops itself
     node = rclpy.create_node(args.nodename or NODE_NAME)
     try:
-        redirect_client_log()
+        redirect_client_log(node)  # the client's log, the bridge's and this script's on the node's logger
         quiet_closed_contexts()
         client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
         client.connect()

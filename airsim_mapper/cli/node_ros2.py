@@ -8,6 +8,7 @@ and /rosout). SIGINT or SIGTERM stops the node within --shutdown-timeout seconds
 
 from __future__ import annotations
 
+import logging
 import signal
 import sys
 import time
@@ -42,7 +43,7 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     from rclpy.utilities import remove_ros_args
 
     from airsim_mapper.engine import Diagnostics, close_client
-    from airsim_mapper.engine.ros2_node import Spinner
+    from airsim_mapper.engine.ros2_node import ROSOUT_LOGGER, Spinner, log_to
     from airsim_mapper.mapping.names import resolve_namespace
     from airsim_mapper.wrapper import redirect_client_log
 
@@ -52,9 +53,10 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     node = rclpy.create_node(
         args.nodename or DEFAULT_NODE_NAME, automatically_declare_parameters_from_overrides=True
     )
+    handler = log_to(node)
+    redirect_client_log()
     spinner = Spinner(node)
     spinner.start()
-    redirect_client_log()
     stop.at_once = False
     engine = diagnostics = reloader = None
     try:
@@ -96,6 +98,7 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
         if engine is not None:
             engine.shutdown(max(0.5, args.shutdown_timeout - 1.5), client_topics=True)
             close_client(engine.client)
+        logging.getLogger(ROSOUT_LOGGER).removeHandler(handler)
         spinner.stop()
         node.destroy_node()
         rclpy.try_shutdown()
