@@ -192,7 +192,11 @@ class ProjectAirSimWrapper:
         self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown
         if client is None:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
-            client = client_factory()
+            try:
+                client = client_factory()
+            except BaseException:
+                self.ros_node.close()
+                raise
         self.sim_config_path = str(sim_config_path)
         # The status topic and diagnostics go by the ROS node's full name, unique on the master (so that
         # /sim1/projectairsim and /sim2/projectairsim differ); the mapping's <node_name> is its last part.

@@ -30,9 +30,9 @@ INFO, WARN, ERROR, FATAL = 20, 30, 40, 50  # rcl_interfaces/msg/Log's levels
 STOPPED_WITHIN_S = 5.0
 
 
-def listen(python: Path, domain: int, seconds: float) -> dict:
-    """listen_ros2.py's first message of each of TOPICS."""
-    args = [f"{kind}={topic}" for kind, topic in TOPICS.values()]
+def listen(python: Path, domain: int, seconds: float, topics: dict = TOPICS) -> dict:
+    """listen_ros2.py's first message of each of `topics`."""
+    args = [f"{kind}={topic}" for kind, topic in topics.values()]
     out = subprocess.run(
         [str(python), str(LISTENER), str(seconds), *args],
         env=ros2_env(domain),
@@ -169,3 +169,38 @@ def test_with_use_sim_time_the_ros2_nodes_stamps_follow_clock_and_stand_still_wh
     assert len({d["stamp_ns"] for d in running}) == len(running) >= 2  # sim time ran before the pause
     node.popen.send_signal(signal.SIGINT)
     assert node.popen.wait(timeout=30) == 0, node.output()[-3000:]
+
+
+OWN_NODE_SCRIPT = """
+import signal, sys
+import rclpy
+from airsim_mapper.wrapper import ProjectAirSimWrapper
+
+signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})  # for sigwait, in every thread to come
+rclpy.init()
+wrapper = ProjectAirSimWrapper(
+    topicsport=int(sys.argv[1]), servicesport=int(sys.argv[2]), sim_config_path=sys.argv[3],
+    scene="scene_basic_drone.jsonc", node_name="mission_node",
+)
+print("bridging as", wrapper.ros_node.name, flush=True)
+signal.sigwait({signal.SIGINT})
+rclpy.shutdown()  # the wrapper shuts down with rclpy's context
+print("closed" if wrapper.engine.state == "stopped" else f"still {wrapper.engine.state}", flush=True)
+"""
+
+
+def test_a_wrapper_given_no_node_makes_its_own_client_and_node_and_ends_with_rclpys_shutdown(
+    launcher: Rig, ros2_python: Path, ros_domain: int, tmp_path: Path
+) -> None:
+    server = launcher.simserver()
+    launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
+    script = tmp_path / "own_node.py"
+    script.write_text(OWN_NODE_SCRIPT)
+    ports = [str(server.ports.topics), str(server.ports.services), str(ROOT / "sim_config")]
+    mission = launcher.start("own_node", [str(ros2_python), str(script), *ports], cwd=ROOT)
+    wait_until(lambda: "bridging as /mission_node" in mission.output(), 60, what="the wrapper")
+    heard = listen(ros2_python, ros_domain, 30.0, topics={"pose": TOPICS["pose"]})
+    assert f"{DRONE}/actual_pose" in heard, mission.output()[-3000:]
+    mission.popen.send_signal(signal.SIGINT)
+    assert mission.popen.wait(timeout=30) == 0, mission.output()[-3000:]
+    assert "closed" in mission.output() and "Traceback" not in mission.output(), mission.output()[-3000:]
