@@ -164,7 +164,8 @@ def test_with_use_sim_time_the_ros2_nodes_stamps_follow_clock_and_stand_still_wh
     last_tick = max(c["clock_ns"] for c in clock)
     quiet = [d for d in diagnostics if d["arrived_ns"] > paused_at + 1.5 * 10**9]
     assert len(quiet) >= 2, diagnostics
-    assert {d["stamp_ns"] for d in quiet} == {last_tick}, (quiet, last_tick)
+    (stood_at,) = {d["stamp_ns"] for d in quiet}
+    assert abs(stood_at - last_tick) <= 50_000_000, (quiet, last_tick)  # a /clock tick this recorder missed
     running = [d for d in diagnostics if d["arrived_ns"] < paused_at]
     assert len({d["stamp_ns"] for d in running}) == len(running) >= 2  # sim time ran before the pause
     node.popen.send_signal(signal.SIGINT)
