@@ -79,4 +79,5 @@ def test_log_to_hands_the_rosout_records_and_the_clients_to_one_node_at_a_time(r
     logging.getLogger("rosout.projectairsim").warning("Unable to unsubscribe from all topics.")
     assert first.logger.calls == [("info", "bridged")]
     assert second.logger.calls == [("warning", "Unable to unsubscribe from all topics.")]
-    assert [h for h in rosout.handlers if isinstance(h, RclpyHandler)] != [handler]
+    (current,) = [h for h in rosout.handlers if isinstance(h, RclpyHandler)]
+    assert current is not handler and current.logger_name == "sim1.second"
