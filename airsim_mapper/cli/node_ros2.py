@@ -2,8 +2,9 @@
 
 Each setting that is a private parameter on ROS1 is a ROS 2 parameter of the node (`--ros-args -p
 scene:=...`); the command line wins. `--ros-args -r __ns:=/sim1` and `__node:=` name the node; the
-mapping's names resolve below its namespace. The node's log records go to rclpy's logger (the console
-and /rosout). SIGINT or SIGTERM stops the node within --shutdown-timeout seconds.
+mapping's names resolve below its namespace. The node's log records and the client's go to rclpy's
+logger (the console and /rosout). `-p use_sim_time:=true` puts the node's clock, and so every stamp it
+takes from it, on /clock. SIGINT or SIGTERM stops the node within --shutdown-timeout seconds.
 """
 
 from __future__ import annotations
