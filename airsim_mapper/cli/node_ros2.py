@@ -52,14 +52,16 @@ class RclpyHandler(logging.Handler):
             self.handleError(record)
 
 
-def spin(executor: Any, context: Any) -> None:
-    """Run the executor until rclpy shuts down. A bridge stopped on a scene change destroys its endpoints
-    while the executor may be waiting on them; rclpy then raises InvalidHandle from the wait, and the
-    executor carries on with the endpoints that are left."""
+def spin(executor: Any, context: Any, done: threading.Event) -> None:
+    """Run the executor until `done` is set or rclpy shuts down. A bridge stopped on a scene change
+    destroys its endpoints while the executor may be waiting on them; rclpy then raises InvalidHandle from
+    the wait, and the executor carries on with the endpoints that are left. The node's shutdown sets `done`
+    and joins this thread before it shuts rclpy down: a wait begun after that would fail on the invalid
+    context."""
     from rclpy.exceptions import InvalidHandle
     from rclpy.executors import ExternalShutdownException, ShutdownException
 
-    while context.ok():
+    while context.ok() and not done.is_set():
         try:
             executor.spin_once(timeout_sec=SPIN_S)
         except InvalidHandle:
@@ -99,7 +101,10 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     logging.getLogger("rosout").setLevel(logging.INFO)
     executor = MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
-    spinner = threading.Thread(target=spin, args=(executor, node.context), name="rclpy-executor", daemon=True)
+    done = threading.Event()
+    spinner = threading.Thread(
+        target=spin, args=(executor, node.context, done), name="rclpy-executor", daemon=True
+    )
     spinner.start()
     stop.at_once = False
     engine = diagnostics = reloader = None
@@ -143,6 +148,9 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
             engine.shutdown(max(0.5, args.shutdown_timeout - 1.5), client_topics=True)
             close_client(engine.client)
         logging.getLogger("rosout").removeHandler(handler)
+        done.set()
+        executor.wake()  # its wait ends now, not after SPIN_S
+        spinner.join(timeout=2 * SPIN_S)
         executor.shutdown(timeout_sec=1.0)
         node.destroy_node()
         rclpy.try_shutdown()
