@@ -45,7 +45,7 @@ def main(status_topic: str, image_topic: str, suffix: str, cycles: int = 1) -> i
     def stopped() -> bool:
         """The stream went and stays gone for a while."""
         spin_for(SETTLE_S * 2, lambda: not streaming())
-        spin_for(SETTLE_S)
+        spin_for(SETTLE_S / 2)  # two more statuses
         return not streaming()
 
     spin_for(WAIT_S, lambda: "streams" in latest)

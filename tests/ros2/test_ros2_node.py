@@ -149,6 +149,7 @@ def test_a_lazy_image_stream_follows_its_ros2_subscribers_as_they_come_and_go(
     )
     assert out.returncode == 0, out.stderr
     seen = json.loads(out.stdout.strip().splitlines()[-1])
+    print(seen)
     assert seen["before"] is False, seen
     for cycle in seen["cycles"]:  # subscribed while a subscriber is there, each time
         assert cycle["images"] > 0, node.output()[-3000:]

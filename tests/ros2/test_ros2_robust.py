@@ -28,6 +28,7 @@ LOAD_SCENE = "/ProjectAirSim/node/projectairsim/load_scene"
 DRONE = "/airsim_node/Drone1"
 POSE = ("geometry_msgs/PoseStamped", f"{DRONE}/actual_pose")
 IMAGE = ("sensor_msgs/Image", f"{DRONE}/DownCamera/scene_camera/image")
+DEPTH = ("sensor_msgs/Image", f"{DRONE}/DownCamera/depth_planar_camera/image")
 NEW_IMAGE = ("sensor_msgs/Image", f"{DRONE}/DownCamera/scene_camera/image_raw")
 CHASE_IMAGE = f"{DRONE}/Chase/scene_camera/image"
 ODOM = f"{DRONE}/odom"
@@ -52,6 +53,7 @@ rules:
     frame_id: <frame_prefix>map
 """
 INVALID = EDIT + "  - {name: imu, converter: imuu}\n"
+RESTARTS = 3
 INVALID_ERROR = "rule 'imu': unknown converter 'imuu' (did you mean 'imu'?)"
 
 
@@ -135,13 +137,17 @@ def stopped_cleanly(node: Child, sig: int, within: float) -> float:
     return took
 
 
-def test_the_ros2_node_comes_back_after_a_simulator_restart_with_its_subscribers_served(
+def threads_and_files(pid: int) -> tuple[int, int]:
+    return len(list(Path(f"/proc/{pid}/task").iterdir())), len(list(Path(f"/proc/{pid}/fd").iterdir()))
+
+
+def test_the_ros2_node_comes_back_after_each_simulator_restart_with_its_subscribers_served(
     launcher: Rig, ros2_python: Path, ros_domain: int
 ) -> None:
     ports = SimPorts.free()
     server = launcher.simserver(ports=ports).process
     node = start_node(launcher, ros_domain, ports, "--scene", SCENE)
-    # the image subscriber is there across the restart: its lazy stream must be subscribed again
+    # the image subscriber is there across the restarts: its lazy stream must be subscribed again each time
     watch = start_watch(
         launcher, ros2_python, ros_domain, topic(IMAGE), topic(POSE), topic(TF), f"status:{STATUS}"
     )
@@ -151,31 +157,41 @@ def test_the_ros2_node_comes_back_after_a_simulator_restart_with_its_subscribers
         what=f"images, poses and /tf before the restart; node log:\n{node.output()[-2000:]}",
     )
     time.sleep(3.0)  # simulation time well past what the restarted server reaches before the node is back
-    server.stop(signal.SIGKILL)
-    killed = time.time()
-    wait_until(
-        lambda: any(s["state"] == "stale" and s["sim_losses"] == 1 for s in statuses(watch)),
-        10,
-        what="the status to say stale",
-    )
-    launcher.simserver(ports=ports, wait=False)
-    wait_until(
-        lambda: statuses(watch)[-1]["state"] == "connected" and statuses(watch)[-1]["reconnects"] == 1,
-        30,
-        what=f"the status to say connected again; node log:\n{node.output()[-2000:]}",
-    )
-    back = time.time()
-    for name in (POSE[1], IMAGE[1], "/tf"):
-        wait_until(lambda n=name: arrived_after(watch, n, back), 30, what=f"{name} after the restart")
+    recoveries, counts = [], []
+    for cycle in range(1, RESTARTS + 1):
+        server.stop(signal.SIGKILL)
+        killed = time.time()
+        wait_until(
+            lambda c=cycle: any(s["state"] == "stale" and s["sim_losses"] == c for s in statuses(watch)),
+            10,
+            what=f"restart {cycle}: the status to say stale",
+        )
+        server = launcher.simserver(ports=ports, wait=False).process
+
+        def connected(c: int = cycle) -> bool:
+            last = statuses(watch)[-1]
+            return last["state"] == "connected" and last["reconnects"] == c
+
+        wait_until(
+            connected, 30, what=f"restart {cycle}: connected again; node log:\n{node.output()[-2000:]}"
+        )
+        back = time.time()
+        for name in (POSE[1], IMAGE[1], "/tf"):
+            wait_until(lambda n=name, b=back: arrived_after(watch, n, b), 30, what=f"restart {cycle}: {name}")
+        recoveries.append(min(t for t in arrivals(watch, IMAGE[1]) if t > killed) - killed)
+        time.sleep(0.3)
+        counts.append(threads_and_files(node.pid))
+    print(f"first image after each kill (s): {[round(r, 2) for r in recoveries]}; threads, files: {counts}")
+    assert counts[-1][0] <= counts[0][0] + 1 and counts[-1][1] <= counts[0][1] + 2, "threads or files leak"
+    late = start_watch(launcher, ros2_python, ros_domain, topic(DEPTH))  # a subscriber that comes afterwards
+    wait_until(lambda: arrivals(late, DEPTH[1]), 30, what="depth images for a subscriber after the restarts")
     states = [s["state"] for s in statuses(watch)]
     assert states.index("stale") < len(states) - 1 - states[::-1].index("connected")
     assert statuses(watch)[-1]["scene"] == SCENE
     # the new simulator's clock started over: the node's own tf (goals in its frames) started over too
     wait_until(lambda: "tf buffer cleared" in node.output(), 10, what="the node's tf cleared")
     assert statuses(watch)[-1]["sim_time_jumps_back"] >= 1
-    assert "simulator back: " in node.output() and node.alive()
-    first = min(t for t in arrivals(watch, IMAGE[1]) if t > killed)
-    print(f"first image {first - killed:.2f} s after the kill")
+    assert node.output().count("simulator back: ") == RESTARTS and node.alive()
     stopped_cleanly(node, signal.SIGINT, 10.0)
 
 
