@@ -215,7 +215,7 @@ def test_an_edited_mapping_is_applied_to_the_ros2_graph_and_a_broken_edit_change
         now = graph(watch)
         return {NEW_IMAGE[1], POSE_COPY[1]} <= now.keys() and not {IMAGE[1], ODOM} & now.keys()
 
-    wait_until(applied, 5, what="the added topics in the graph, the removed ones gone")
+    wait_until(applied, 10, what="the added topics in the graph, the removed ones gone")
     took = time.time() - edited
     now = graph(watch)
     assert now[NEW_IMAGE[1]] == ["sensor_msgs/msg/Image"]
