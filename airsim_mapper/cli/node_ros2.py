@@ -55,9 +55,11 @@ class RclpyHandler(logging.Handler):
 def spin(executor: Any, context: Any, done: threading.Event) -> None:
     """Run the executor until `done` is set or rclpy shuts down. A bridge stopped on a scene change
     destroys its endpoints while the executor may be waiting on them; rclpy then raises InvalidHandle from
-    the wait, and the executor carries on with the endpoints that are left. The node's shutdown sets `done`
-    and joins this thread before it shuts rclpy down: a wait begun after that would fail on the invalid
-    context."""
+    the wait, and the executor carries on with the endpoints that are left. rclpy re-raises a callback's
+    exception from a later wait: it is logged and the node keeps serving its other callbacks (uncaught, it
+    would end this thread, and with it every subscriber, service and lazy stream of the node). The node's
+    shutdown sets `done` and joins this thread before it shuts rclpy down: a wait begun after that would
+    fail on the invalid context."""
     from rclpy.exceptions import InvalidHandle
     from rclpy.executors import ExternalShutdownException, ShutdownException
 
@@ -68,6 +70,8 @@ def spin(executor: Any, context: Any, done: threading.Event) -> None:
             continue
         except (ExternalShutdownException, ShutdownException):
             return
+        except Exception:
+            log.exception("a ROS 2 callback failed; the node carries on")
 
 
 def overridden(node: Any) -> dict[str, Any]:

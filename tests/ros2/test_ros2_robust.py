@@ -308,3 +308,20 @@ def test_a_signal_stops_the_ros2_node_at_once_with_nothing_left_running(
     took = stopped_cleanly(node, sig, 10.0)
     print(f"{moment}: {signal.Signals(sig).name} stopped the node in {took:.2f} s")
     assert took < 5.0
+
+
+def test_a_callback_that_raises_is_logged_and_the_nodes_executor_keeps_serving(
+    ros2_python: Path, ros_domain: int
+) -> None:
+    run = subprocess.run(
+        [str(ros2_python), str(HERE / "spin_ros2.py")],
+        env=ros2_env(ros_domain),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert run.returncode == 0, run.stderr
+    seen = json.loads(run.stdout.strip().splitlines()[-1])
+    assert seen["spinning"] and seen["ticks"] > 10, (seen, run.stderr)  # it failed at the third
+    assert "a ROS 2 callback failed; the node carries on" in run.stderr
+    assert "RuntimeError: a callback fails" in run.stderr
