@@ -54,6 +54,7 @@ rules:
 """
 INVALID = EDIT + "  - {name: imu, converter: imuu}\n"
 RESTARTS = 3
+SHUTDOWN_TIMEOUT_S = 5.0  # the node's default --shutdown-timeout
 INVALID_ERROR = "rule 'imu': unknown converter 'imuu' (did you mean 'imu'?)"
 
 
@@ -286,8 +287,15 @@ def test_a_second_scene_loaded_while_streaming_replaces_the_robots_topics_and_st
         ("streaming", signal.SIGTERM),
         ("reloading", signal.SIGTERM),
         ("reloading", signal.SIGINT),
+        ("frozen", signal.SIGTERM),
     ],
-    ids=["connecting-SIGTERM", "streaming-SIGTERM", "reloading-SIGTERM", "reloading-SIGINT"],
+    ids=[
+        "connecting-SIGTERM",
+        "streaming-SIGTERM",
+        "reloading-SIGTERM",
+        "reloading-SIGINT",
+        "frozen-SIGTERM",
+    ],
 )
 def test_a_signal_stops_the_ros2_node_at_once_with_nothing_left_running(
     launcher: Rig, ros2_python: Path, ros_domain: int, tmp_path: Path, moment: str, sig: int
@@ -305,9 +313,16 @@ def test_a_signal_stops_the_ros2_node_at_once_with_nothing_left_running(
         if moment == "reloading":
             atomic_write(mapping, EDIT)  # the watcher finds it within its poll period, 0.25 s
             time.sleep(0.3)
-    took = stopped_cleanly(node, sig, 10.0)
+        if moment == "frozen":  # the simulator answers nothing: shutdown's unsubscribe gets no reply
+            server.process.popen.send_signal(signal.SIGSTOP)
+            time.sleep(0.3)
+    try:
+        took = stopped_cleanly(node, sig, 10.0)
+    finally:
+        if moment == "frozen":
+            server.process.popen.send_signal(signal.SIGCONT)
     print(f"{moment}: {signal.Signals(sig).name} stopped the node in {took:.2f} s")
-    assert took < 5.0
+    assert took < (SHUTDOWN_TIMEOUT_S + 1.0 if moment == "frozen" else 5.0)
 
 
 def test_a_callback_that_raises_is_logged_and_the_nodes_executor_keeps_serving(
