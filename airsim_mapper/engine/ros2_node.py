@@ -11,11 +11,14 @@ import logging
 import threading
 from typing import Any
 
+from airsim_mapper.common.logs import ros_logger
+
 __all__ = ["ROSOUT_LOGGER", "RclpyHandler", "Spinner", "log_to", "spin"]
 
 ROSOUT_LOGGER = "rosout"  # the parent of the bridge's loggers (`ros_logger`), the client's forwarded log too
 SPIN_S = 0.5  # the executor's wait, between checks that rclpy still runs
 EXECUTOR_THREADS = 4
+log = ros_logger("airsim_mapper.node")
 
 
 class RclpyHandler(logging.Handler):
@@ -63,7 +66,9 @@ def log_to(node: Any, level: int = logging.INFO) -> RclpyHandler:
 def spin(executor: Any, context: Any, stop: threading.Event | None = None) -> None:
     """Run the executor until rclpy shuts down (or `stop` is set). A bridge stopped on a scene change
     destroys its endpoints while the executor may be waiting on them; rclpy then raises InvalidHandle from
-    the wait, and the executor carries on with the endpoints that are left."""
+    the wait, and the executor carries on with the endpoints that are left. rclpy re-raises a callback's
+    exception from a later wait: it is logged and the node keeps serving its other callbacks (uncaught, it
+    would end this thread, and with it every subscriber, service and lazy stream of the node)."""
     from rclpy.exceptions import InvalidHandle
     from rclpy.executors import ExternalShutdownException, ShutdownException
 
@@ -75,6 +80,8 @@ def spin(executor: Any, context: Any, stop: threading.Event | None = None) -> No
             continue
         except (ExternalShutdownException, ShutdownException):
             return
+        except Exception:
+            log.exception("a ROS 2 callback failed; the node carries on")
 
 
 class Spinner:
@@ -97,6 +104,7 @@ class Spinner:
     def stop(self, timeout: float = 1.0) -> None:
         """Stop the executor; the node stays (its owner destroys it)."""
         self._stop.set()  # the spin loop ends first: a shut-down executor refuses the callbacks it finds
+        self.executor.wake()  # its wait ends now, not after SPIN_S
         if self._thread.is_alive():
             self._thread.join(timeout=SPIN_S + timeout)
         self.executor.shutdown(timeout_sec=timeout)
