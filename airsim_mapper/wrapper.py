@@ -1,17 +1,25 @@
 """ProjectAirSimWrapper: the bridge as an object a mission script embeds (the public API that the Project
-AirSim ROS bridge documentation describes).
+AirSim ROS bridge documentation describes), on ROS1 and on ROS 2.
 
-Call `rospy.init_node` first. Without a scene the wrapper runs the node's own bridges (load_scene) and
-waits for one. The wrapper either creates its own client (kept in `projectairsim_client`
-and disconnected at ROS shutdown) or takes one (then never disconnects it: the script does, and until then
-the client's receive thread keeps the process alive, as it does without the bridge). After a mission script
-loads a scene itself with `World(...)`, it calls `update_topics(world)` so the bridges follow. The README's
-example shows the whole pattern (`disable_signals=True`, so that Ctrl-C also stops a running mission).
+The flavour is the one the converters build messages for (`convert.flavour`): ROS1 where genpy is
+importable (`.venv`), ROS 2 where only rclpy is (`.venv-ros2`), as the node chooses without `--ros`.
+On ROS1, call `rospy.init_node` first. On ROS 2, call `rclpy.init` first and pass the script's node
+(`node=`), or the wrapper makes one named `node_name` (default "projectairsim"); either way the wrapper
+spins it with an executor on a thread of its own, sends the bridge's and the client's log to its logger
+(console and /rosout), and shuts down with rclpy's context.
+
+Without a scene the wrapper runs the node's own bridges (load_scene) and waits for one. The wrapper either
+creates its own client (kept in `projectairsim_client` and disconnected at ROS shutdown) or takes one (then
+never disconnects it: the script does, and until then the client's receive thread keeps the process alive,
+as it does without the bridge). After a mission script loads a scene itself with `World(...)`, it calls
+`update_topics(world)` so the bridges follow. The README's example shows the whole pattern
+(`disable_signals=True`, so that Ctrl-C also stops a running mission); `scripts/hello_ros2.py` is its ROS 2
+twin.
 
 Reliability: a wrapper that made its client (or was given a `client_factory`) reconnects by itself when
 the simulator restarts and reloads the last scene; with a client supplied by the mission script it only
-reports "stale" on `/airsim_mapper/<node>/status`. A restarted ROS master is noticed and the node's
-topics and services are registered with it again (engine/reregister.py).
+reports "stale" on `/airsim_mapper/<node>/status`. On ROS1 a restarted ROS master is noticed and the
+node's topics and services are registered with it again (engine/reregister.py).
 """
 
 from __future__ import annotations
@@ -22,20 +30,18 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-import rospy
-
 from airsim_mapper.common.errors import AirsimMapperError
 from airsim_mapper.common.logs import caller_logger, ros_logger, wait_for_rosout
 from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT
 from airsim_mapper.common.resources import DEFAULT_MAPPING
 from airsim_mapper.common.tuning import keep_frame_buffers
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.engine import (
     MAX_FRAME_MB,
     SHUTDOWN_TIMEOUT_S,
     Diagnostics,
     Engine,
     FrameCounts,
-    MasterWatch,
     NodeNames,
     SimAccess,
     close_client,
@@ -48,16 +54,23 @@ from airsim_mapper.mapping.names import resolve_namespace
 from airsim_mapper.mapping.scene import Scene, scene_from_config
 
 log = ros_logger("airsim_mapper")
+DEFAULT_NODE_NAME = "projectairsim"  # the node a ROS 2 wrapper makes when it is given none
 
 
 class WrapperError(AirsimMapperError, RuntimeError):
     """The wrapper cannot do what was asked (the message says why)."""
 
 
-def redirect_client_log() -> None:
+def redirect_client_log(node: Any = None) -> None:
     """Send the projectairsim client's log records to `rosout.projectairsim` (console and /rosout), as far
-    as that logger's level lets them through."""
+    as that logger's level lets them through. On ROS 2 give the script's rclpy node: the `rosout.*` records
+    go to its logger from now on (call this before the client connects, so its first lines get there)."""
     from projectairsim.utils import projectairsim_log
+
+    if node is not None:
+        from airsim_mapper.engine.ros2_node import log_to
+
+        log_to(node)
 
     client_log = caller_logger(projectairsim_log())  # its records name their caller on /rosout too
     if any(getattr(f, "airsim_mapper", False) for f in client_log.filters):
@@ -72,6 +85,71 @@ def redirect_client_log() -> None:
 
     _redirect.airsim_mapper = True  # type: ignore[attr-defined]
     client_log.addFilter(_redirect)
+
+
+class Ros1Node:
+    """The wrapper's ROS1 side: the process's rospy node (`rospy.init_node` first), the engine's default ROS
+    link, and the watch that registers the node again with a restarted master."""
+
+    def __init__(self) -> None:
+        import rospy
+
+        wait_for_rosout()  # so that what the wrapper and its client log first reaches rosout.log (logs.py)
+        self.name, self.namespace = rospy.get_name(), rospy.get_namespace()
+        self.link: Any = None  # the engine makes ROS1's
+        self._watch: Any = None
+
+    def start(self, on_shutdown: Callable[[], None]) -> None:
+        import rospy
+
+        from airsim_mapper.engine import MasterWatch
+
+        self._watch = MasterWatch()
+        self._watch.start()
+        rospy.on_shutdown(on_shutdown)
+
+    def stop(self) -> None:
+        """Before the bridges stop: no registering them again."""
+        if self._watch is not None:
+            self._watch.stop()
+
+    def close(self) -> None:
+        """After the bridges stopped: rospy's node is the script's."""
+
+
+class Ros2Node:
+    """The wrapper's ROS 2 side: an rclpy node (the script's, else one made here and destroyed at the end)
+    spun by an executor thread of its own, its logger taking the bridge's and the client's records."""
+
+    def __init__(self, node: Any, node_name: str | None) -> None:
+        import rclpy
+
+        from airsim_mapper.engine.ros2_link import Ros2Link
+        from airsim_mapper.engine.ros2_node import Spinner, log_to
+
+        self._made = node is None
+        self.node = rclpy.create_node(node_name or DEFAULT_NODE_NAME) if node is None else node
+        self.name, self.namespace = self.node.get_fully_qualified_name(), self.node.get_namespace()
+        self.link = Ros2Link(self.node)
+        self._log = log_to(self.node)
+        self._spinner = Spinner(self.node)
+        self._spinner.start()
+
+    def start(self, on_shutdown: Callable[[], None]) -> None:
+        self.node.context.on_shutdown(on_shutdown)
+
+    def stop(self) -> None:
+        """Before the bridges stop: the node spins on, so that what they log still reaches /rosout."""
+
+    def close(self) -> None:
+        """After the bridges stopped: the executor, and the node and its log if the node was made here. A
+        script's node keeps the log (what the script and its client log later still reach it)."""
+        from airsim_mapper.engine.ros2_node import ROSOUT_LOGGER
+
+        self._spinner.stop()
+        if self._made:
+            logging.getLogger(ROSOUT_LOGGER).removeHandler(self._log)
+            self.node.destroy_node()
 
 
 class ProjectAirSimWrapper:
@@ -104,39 +182,43 @@ class ProjectAirSimWrapper:
         shutdown_timeout: float = SHUTDOWN_TIMEOUT_S,
         tune_process: bool = False,
         max_frame_mb: float = MAX_FRAME_MB,
+        node: Any = None,
     ) -> None:
         keep_frame_buffers()  # process-wide, from the first frame the bridge receives (tuning.py)
         redirect_client_log()
-        wait_for_rosout()  # so that what the wrapper and its client log first reaches rosout.log (logs.py)
+        self.ros_node = Ros2Node(node, node_name) if ROS2 else Ros1Node()
         self.shutdown_timeout = shutdown_timeout
         self.mapping = mapping if isinstance(mapping, MappingDoc) else load_mapping(mapping)
         self._owns_client = client is None if disconnect_on_shutdown is None else disconnect_on_shutdown
         if client is None:
             client_factory = client_factory or partial(open_client, address, topicsport, servicesport)
-            client = client_factory()
+            try:
+                client = client_factory()
+            except BaseException:
+                self.ros_node.close()
+                raise
         self.sim_config_path = str(sim_config_path)
         # The status topic and diagnostics go by the ROS node's full name, unique on the master (so that
         # /sim1/projectairsim and /sim2/projectairsim differ); the mapping's <node_name> is its last part.
-        ros_name = rospy.get_name()
+        ros_name = self.ros_node.name
         name = node_name if node_name is not None else ros_name.rsplit("/", 1)[-1]
         # As a ROS name: "sim1" below the node's namespace (ROS_NAMESPACE, <group ns>, __ns:=); "/sim1" as is
-        namespace = resolve_namespace(namespace, rospy.get_namespace())
+        namespace = resolve_namespace(namespace, self.ros_node.namespace)
         self.namespace = namespace
         self.engine = Engine(
             client,
             self.mapping,
             NodeNames(name, namespace, ros_name),
             SimAccess(self.sim_config_path, client_factory=client_factory),
+            ros=self.ros_node.link,
             frame_counts=FrameCounts(max_frame_bytes=int(max_frame_mb * 1024 * 1024)),
             tune=tune_process,
         )
         self.engine.start()
-        self.master_watch = MasterWatch()
-        self.master_watch.start()
         self.diagnostics = Diagnostics(self.engine, ros_name)
         self.diagnostics.start()
         self._closed = False
-        rospy.on_shutdown(self.shutdown)
+        self.ros_node.start(self.shutdown)
         self.engine.start_node_bridges()  # load_scene is there before (and without) any scene
         if scene:
             self.engine.load_scene(scene)
@@ -194,7 +276,7 @@ class ProjectAirSimWrapper:
         if self._closed:
             return
         self._closed = True
-        self.master_watch.stop()
+        self.ros_node.stop()
         self.diagnostics.stop()
         # Within the engine's shutdown budget whatever the simulator does: an owned client's subscriptions
         # are unsubscribed with the engine's own in one bounded request, then its sockets are closed (the
@@ -202,3 +284,4 @@ class ProjectAirSimWrapper:
         self.engine.shutdown(self.shutdown_timeout, client_topics=self._owns_client)
         if self._owns_client:
             close_client(self.engine.client)
+        self.ros_node.close()

@@ -16,6 +16,7 @@ import logging
 import signal
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -44,18 +45,18 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
-async def mission(drone, target: tuple[float, float, float], speed: float) -> None:
-    """Take off, then shuttle between the launch pad and the ball until ROS shuts down."""
-    import rospy
-
+async def mission(
+    drone, target: tuple[float, float, float], speed: float, stopped: Callable[[], bool]
+) -> None:
+    """Take off, then shuttle between the launch pad and the ball until `stopped()` (ROS shut down)."""
     drone.enable_api_control()
     drone.arm()
     await (await drone.takeoff_async())
     home = (0.0, 0.0, target[2])
     legs = 0
-    while not rospy.is_shutdown():
+    while not stopped():
         for x, y, z in (target, home):
-            if rospy.is_shutdown():  # a pre-empted move returned: start no new one
+            if stopped():  # a pre-empted move returned: start no new one
                 return
             log.info("flying to (%.1f, %.1f, %.1f)", x, y, z)
             await (await drone.move_to_position_async(north=x, east=y, down=z, velocity=speed))
@@ -71,13 +72,18 @@ async def main(client, bridge, drone, hover_method: str, args: argparse.Namespac
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):  # Ctrl-C ends the mission and ROS together
         loop.add_signal_handler(sig, rospy.signal_shutdown, f"signal {sig.name}")
-    task = asyncio.create_task(mission(drone, target, args.speed))
+    task = asyncio.create_task(mission(drone, target, args.speed, rospy.is_shutdown))
     deadline = time.monotonic() + args.seconds if args.seconds > 0 else None
     while not rospy.is_shutdown() and not task.done():
         if deadline is not None and time.monotonic() > deadline:
             rospy.signal_shutdown("mission time is up")
             break
         await asyncio.sleep(0.2)  # yield to the mission between checks
+    await stop_mission(client, bridge, task, hover_method)
+
+
+async def stop_mission(client, bridge, task: asyncio.Task, hover_method: str) -> None:
+    """Hold the drone where it is, let the pending requests end, stop the bridge and disconnect."""
     # Hover pre-empts the running move: the simulator answers its pending request (false) and the mission,
     # seeing ROS shut down, starts no other. So no request is left pending when the sockets close (the
     # client would log its ConnectionReset with a traceback), and the drone holds its position.

@@ -2,8 +2,9 @@
 
 Each setting that is a private parameter on ROS1 is a ROS 2 parameter of the node (`--ros-args -p
 scene:=...`); the command line wins. `--ros-args -r __ns:=/sim1` and `__node:=` name the node; the
-mapping's names resolve below its namespace. The node's log records go to rclpy's logger (the console
-and /rosout). SIGINT or SIGTERM stops the node within --shutdown-timeout seconds.
+mapping's names resolve below its namespace. The node's log records and the client's go to rclpy's
+logger (the console and /rosout). `-p use_sim_time:=true` puts the node's clock, and so every stamp it
+takes from it, on /clock. SIGINT or SIGTERM stops the node within --shutdown-timeout seconds.
 """
 
 from __future__ import annotations
@@ -11,7 +12,6 @@ from __future__ import annotations
 import logging
 import signal
 import sys
-import threading
 import time
 from collections.abc import Callable
 from functools import partial
@@ -25,47 +25,6 @@ from airsim_mapper.common.logs import ros_logger
 log = ros_logger("airsim_mapper.node")
 DEFAULT_NODE_NAME = "projectairsim"
 STOP_CHECK_S = 1.0
-SPIN_S = 0.5  # the executor's wait, between checks that rclpy still runs
-
-
-class RclpyHandler(logging.Handler):
-    """Hands the bridge's log records (`rosout.*`) to the node's rclpy logger: console and /rosout, with ROS
-    2's severities."""
-
-    def __init__(self, logger: Any) -> None:
-        super().__init__()
-        self._logger = logger
-
-    def emit(self, record: logging.LogRecord) -> None:
-        # rclpy ties a severity to each calling line: one call per severity
-        try:
-            text, level, logger = self.format(record), record.levelno, self._logger
-            if level >= logging.ERROR:
-                logger.error(text)
-            elif level >= logging.WARNING:
-                logger.warning(text)
-            elif level >= logging.INFO:
-                logger.info(text)
-            else:
-                logger.debug(text)
-        except Exception:  # a log record must never break the code that logged it
-            self.handleError(record)
-
-
-def spin(executor: Any, context: Any) -> None:
-    """Run the executor until rclpy shuts down. A bridge stopped on a scene change destroys its endpoints
-    while the executor may be waiting on them; rclpy then raises InvalidHandle from the wait, and the
-    executor carries on with the endpoints that are left."""
-    from rclpy.exceptions import InvalidHandle
-    from rclpy.executors import ExternalShutdownException, ShutdownException
-
-    while context.ok():
-        try:
-            executor.spin_once(timeout_sec=SPIN_S)
-        except InvalidHandle:
-            continue
-        except (ExternalShutdownException, ShutdownException):
-            return
 
 
 def overridden(node: Any) -> dict[str, Any]:
@@ -81,12 +40,13 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     """The node on ROS 2 (`stop` is the node's signal handler, already installed; `parse_args` and
     `config_problem` are the ROS1 node's, shared)."""
     import rclpy
-    from rclpy.executors import MultiThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
     from rclpy.utilities import remove_ros_args
 
     from airsim_mapper.engine import Diagnostics, close_client
+    from airsim_mapper.engine.ros2_node import ROSOUT_LOGGER, Spinner, log_to
     from airsim_mapper.mapping.names import resolve_namespace
+    from airsim_mapper.wrapper import redirect_client_log
 
     args = parse_args(remove_ros_args(argv)[1:])
     stop.timeout = args.shutdown_timeout
@@ -94,12 +54,9 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
     node = rclpy.create_node(
         args.nodename or DEFAULT_NODE_NAME, automatically_declare_parameters_from_overrides=True
     )
-    handler = RclpyHandler(node.get_logger())
-    logging.getLogger("rosout").addHandler(handler)
-    logging.getLogger("rosout").setLevel(logging.INFO)
-    executor = MultiThreadedExecutor(num_threads=4)
-    executor.add_node(node)
-    spinner = threading.Thread(target=spin, args=(executor, node.context), name="rclpy-executor", daemon=True)
+    handler = log_to(node)
+    redirect_client_log()
+    spinner = Spinner(node)
     spinner.start()
     stop.at_once = False
     engine = diagnostics = reloader = None
@@ -142,8 +99,8 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
         if engine is not None:
             engine.shutdown(max(0.5, args.shutdown_timeout - 1.5), client_topics=True)
             close_client(engine.client)
-        logging.getLogger("rosout").removeHandler(handler)
-        executor.shutdown(timeout_sec=1.0)
+        logging.getLogger(ROSOUT_LOGGER).removeHandler(handler)
+        spinner.stop()
         node.destroy_node()
         rclpy.try_shutdown()
 

@@ -3,8 +3,9 @@
 Its face, the names the layers above use: the `Engine` and what it is made with (`NodeNames`, `SimAccess`,
 `FrameCounts`), connecting to a simulator (`open_client`, `close_client`, `Backoff`, `retry_quietly` and
 their errors), what the wrapper and the node add around an engine (`Diagnostics`, `MasterWatch`,
-`MappingReloader`, `WaitingStatus`), the limits they default to, and the module `ros2_link` (the ROS link
-on ROS 2, which the ROS 2 node imports). Everything else is the engine's own.
+`MappingReloader`, `WaitingStatus`), the limits they default to, and the modules `ros2_link` (the ROS link
+on ROS 2, which the ROS 2 node imports) and `ros2_node` (the rclpy node's executor thread and log handler,
+the ROS 2 node's and wrapper's). Everything else is the engine's own.
 
 Each name is imported from its module on first use, so that importing one (the node's start-up imports
 `open_client` before ROS is up) does not import rospy and the rest of the engine with it.
@@ -46,6 +47,7 @@ __all__ = [
     "open_client",
     "retry_quietly",
     "ros2_link",
+    "ros2_node",
 ]
 
 _HOMES = {

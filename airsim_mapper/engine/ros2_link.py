@@ -254,7 +254,8 @@ class Ros2Link:
     def _send_static(self) -> None:
         transforms = list(self._static.values())
         self.frames.add(transforms)
-        self._static_tf.publish(self._tf_message(transforms=transforms))
+        if self.node.context.ok():  # bridges stopping after rclpy shut down (a wrapper with it): nobody hears
+            self._static_tf.publish(self._tf_message(transforms=transforms))
 
     def transform_pose(self, pose_stamped: Any, target: str) -> Any:
         """A PoseStamped in the `target` frame through this node's own latest transforms (FrameUnknown when
