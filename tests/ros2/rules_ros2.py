@@ -60,10 +60,14 @@ def main() -> int:
     rclpy.init()
     node = rclpy.create_node("rules_ros2")
     got: dict[str, dict] = {}
+    arrived: dict[str, float] = {}  # seconds from the first subscription to a topic's first message
+    started = time.monotonic()
     for pub in spec["publishers"]:
 
         def on_message(msg: object, topic: str = pub["topic"]) -> None:
-            got.setdefault(topic, summary(msg))
+            if topic not in got:
+                got[topic] = summary(msg)
+                arrived[topic] = round(time.monotonic() - started, 2)
 
         node.create_subscription(ros_class(pub["type"], "msg"), pub["topic"], on_message, profile(pub["qos"]))
     wanted = {pub["topic"] for pub in spec["publishers"] if not pub["events"]}
@@ -86,19 +90,22 @@ def main() -> int:
             for name, types in node.get_service_names_and_types_by_node(name, namespace or "/")
         },
     }
-    answers, took = {}, {}
+    answers, took = {}, {}  # per service: its response's fields, and the seconds the call took
     for service in spec["services"]:
         srv = ros_class(service["type"], "srv")
         client = node.create_client(srv, service["name"])
         answers[service["name"]] = None
-        started = time.monotonic()
+        called = time.monotonic()
         if client.wait_for_service(timeout_sec=10.0):
             future = client.call_async(srv.Request())
             rclpy.spin_until_future_complete(node, future, timeout_sec=CALL_S)
             if future.done() and future.result() is not None:
                 answers[service["name"]] = response_fields(future.result())
-        took[service["name"]] = round(time.monotonic() - started, 2)
-    print(json.dumps({"topics": got, "graph": graph, "answers": answers, "took": took}), flush=True)
+        took[service["name"]] = round(time.monotonic() - called, 2)
+    print(
+        json.dumps({"topics": got, "graph": graph, "answers": answers, "took": took, "arrived": arrived}),
+        flush=True,
+    )
     node.destroy_node()
     rclpy.shutdown()
     return 0

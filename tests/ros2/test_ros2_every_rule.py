@@ -37,10 +37,11 @@ NODE_NAME = "projectairsim"
 MAPPINGS = ("default", "enu")
 SCENES = sorted(path.name for path in (ROOT / "sim_config").glob("scene_*.jsonc"))
 # The services are called one after the other, the flights first, in this order of their rules: a landing
-# from the start height (4 m at 0.2 m/s), then take-offs from the ground (the other services disarm and
-# reset the robots). A flight answers when the robot has arrived, 5-25 s: flights are called on one scene.
+# from the start height, then take-offs from the ground (the other services disarm and reset the robots).
+# A flight answers when the robot has arrived, which takes a while: flights are called on one scene only.
 CALL_ORDER = {"land": -4, "land_all": -3, "takeoff": -2, "takeoff_all": -1}
 FLIGHT_SCENE = "scene_drone_sensors.jsonc"
+WAIT_S = 120.0  # for every topic's first message, with room for a loaded machine
 CASES = [
     pytest.param(mapping, *case.values, id=f"{mapping}-{case.id}")
     for mapping in MAPPINGS
@@ -172,12 +173,13 @@ def test_every_rule_of_the_mapping_delivers_its_type_with_its_qos_on_ros2(
     launcher.env = {**ros2_env(ros_domain), "PYTHONUNBUFFERED": "1"}
     argv = [str(NODE), *server.ports.args(), "--simconfigpath", str(sim_config), "--scene", scene_file]
     node = launcher.start("node_ros2", [*argv, "--mapping", str(mapping_file), "--no-watch"])
-    seen = probe(ros2_python, ros_domain, expected, 90.0)
+    seen = probe(ros2_python, ros_domain, expected, WAIT_S)
     log = node.output()[-3000:]
 
     publishers = expected["publishers"]
     silent = sorted(set(publishers) - expected["events"] - set(seen["topics"]))
-    assert silent == [], f"{silent} delivered nothing; node log:\n{log}"
+    last = sorted(seen["arrived"].items(), key=lambda item: item[1])[-3:]
+    assert silent == [], f"{silent} delivered nothing (the last to arrive: {last}); node log:\n{log}"
     for topic, (ros_type, qos) in publishers.items():
         if topic in seen["topics"]:
             assert seen["topics"][topic]["type"] == ros_type.rpartition("/")[2], topic
