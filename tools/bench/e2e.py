@@ -1,12 +1,12 @@
 """End-to-end runs: replay server -> bridge node -> probe (three processes), next to the raw transports.
 
 A `Bench` owns one private roscore (when it runs ROS1 rows), a ROS 2 domain (when it runs ROS 2 rows) and
-a work folder. Each session, probe and forwarder runs on one ROS flavour (`ros`, 1 or 2): ROS 2's in
-.venv-ros2 (ros2.py), the bridge then `.venv-ros2/bin/airsim-mapper-node`, the probe probe_ros2.py and the
-bare forwarder forwarder_ros2.py. `bridge_session` starts a replay server and a bridge
-node on a generated scene; `probe` measures the given topics through them while /proc samples the CPU and
-memory of the node (and the server). `rospy_baseline` and `pynng_baseline` measure the bare transports
-with the same probe logic, in the same run.
+a work folder. `bridge_session` starts a replay server and a bridge node on a generated scene; `probe`
+measures the given topics through them while /proc samples the CPU and memory of the node (and the
+server). Each session runs on one ROS flavour (`ros`, 1 or 2); ROS 2's processes run in .venv-ros2
+(ros2.py): the bridge is `.venv-ros2/bin/airsim-mapper-node`, the probe probe_ros2.py, the bare forwarder
+forwarder_ros2.py. `rospy_baseline` and `pynng_baseline` measure the bare transports with the same probe
+logic, in the same run.
 """
 
 from __future__ import annotations
