@@ -3,7 +3,7 @@
 # - .venv-ros2 is made from Debian's python3.11 WITHOUT the system site-packages: Debian's ROS1 message
 #   packages (/usr/lib/python3/dist-packages) share their names with ROS 2's and must stay out of it.
 # - It gets the pinned ROS 2 wheels (tools/ros2-requirements.txt) and the project, editable, with its
-#   dependencies; only when either list changed (a stamp file).
+#   dependencies and pytest and hypothesis; only when either list changed (a stamp file) or one is missing.
 # - tools/gen_msgs_ros2.py builds tf2_msgs and radar_msgs (no wheel exists) from msg/ros2/ into the venv
 #   and checks their type hashes against upstream; only when their sources changed.
 # Nothing to activate: the wheels' bootstrapper sets LD_LIBRARY_PATH when .venv-ros2/bin/python starts, and
@@ -22,13 +22,17 @@ fi
 stamp=$venv/.airsim-mapper-deps
 want="$(cat tools/ros2-requirements.txt pyproject.toml | sha256sum | cut -d' ' -f1) $(pwd)"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ] \
-    || ! env -u PYTHONPATH "$venv/bin/python" -c 'import rclpy, airsim_mapper, projectairsim' 2>/dev/null; then
+    || ! env -u PYTHONPATH "$venv/bin/python" \
+        -c 'import rclpy, airsim_mapper, projectairsim, pytest, hypothesis' 2>/dev/null; then
     say "installing the ROS 2 wheels and the project into $venv (log: $venv/pip.log)"
     # commentjson pins lark-parser<0.8 and the rosidl generators need a newer lark: commentjson and
     # projectairsim, which asks for it, go in without their dependencies, then projectairsim's other
     # dependencies; commentjson reads the project's jsonc with lark-parser 0.12 too (tests/ros2 checks).
+    # The test extra (less ruff) goes in too: the converters' property tests run on ROS 2's messages here.
     deps_of_project() { /usr/bin/python3 -c 'import sys, tomllib
-for d in tomllib.load(open("pyproject.toml", "rb"))["project"]["dependencies"]:
+project = tomllib.load(open("pyproject.toml", "rb"))["project"]
+tests = [d for d in project["optional-dependencies"]["test"] if not d.startswith("ruff")]
+for d in project["dependencies"] + tests:
     (d.startswith(("commentjson", "projectairsim")) == (sys.argv[1] == "bare")) and print(d)' "$1"; }
     deps_of_airsim() { "$venv/bin/python" -c 'from importlib.metadata import requires
 for d in requires("projectairsim"):

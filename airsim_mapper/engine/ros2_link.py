@@ -1,9 +1,8 @@
 """The ROS link on ROS 2: the same face as `ros_link.RosLink` (publishers whose matched subscribers drive
 lazy streams, subscribers, services, the clock, batched /tf, /tf_static, tf lookup), over one rclpy node.
 
-QoS: each bridge's `spec.qos` (mapping/qos.py resolves it: the rule's, else its converter's profile), /tf and
-/tf_static as mapping/qos.py gives them; an endpoint without a spec (status, diagnostics) by message family:
-sensor streams best-effort with a small depth, latched topics transient-local depth 1, the rest reliable.
+QoS, all from mapping/qos.py: each bridge's `spec.qos` (the rule's, else its converter's catalogue profile),
+/tf and /tf_static's, and those of the node's own topics without a rule (status, diagnostics).
 There is no tf2_ros wheel: goals are moved between frames through the transforms this node itself sends.
 """
 
@@ -23,7 +22,7 @@ from airsim_mapper.common.ros_types import generated_kind
 from airsim_mapper.engine.errors import EngineError, RosTypeError
 from airsim_mapper.engine.tf_poses import FrameUnknown, moved_pose, transform_from_pose
 from airsim_mapper.mapping.model import Qos
-from airsim_mapper.mapping.qos import TF_QOS, TF_STATIC_QOS
+from airsim_mapper.mapping.qos import SERVICE_QOS, TF_QOS, TF_STATIC_QOS, node_topic_qos
 
 __all__ = [
     "ClosedEndpoint",
@@ -31,28 +30,9 @@ __all__ = [
     "Ros2Link",
     "profile_of",
     "publish",
-    "qos_for",
     "transform_from_pose",
 ]
 
-SENSOR_TYPES = frozenset(
-    {
-        "sensor_msgs/Image",
-        "sensor_msgs/CompressedImage",
-        "sensor_msgs/CameraInfo",
-        "sensor_msgs/PointCloud2",
-        "sensor_msgs/Imu",
-        "sensor_msgs/MagneticField",
-        "sensor_msgs/NavSatFix",
-        "sensor_msgs/FluidPressure",
-        "sensor_msgs/Range",
-        "radar_msgs/RadarScan",
-        "radar_msgs/RadarTracks",
-        "visualization_msgs/MarkerArray",
-    }
-)
-SENSOR_DEPTH = 5
-RELIABLE_DEPTH = 10
 FIRST_LOOKUP_S = 1.0  # the first goal in another frame waits this long for the node's own /tf
 LOOKUP_POLL_S = 0.05
 
@@ -70,27 +50,6 @@ def message_class(ros_type: str, kind: str = "msg") -> type:
         return getattr(importlib.import_module(f"{package}.{kind}"), name)
     except (ImportError, AttributeError) as exc:
         raise RosTypeError(f"ROS {kind} type {ros_type!r} cannot be imported: {exc}") from exc
-
-
-def qos_for(ros_type: str, *, latch: bool = False, depth: int | None = None) -> QoSProfile:
-    """The default QoS of a topic: transient-local depth 1 when latched, best-effort for sensor streams,
-    reliable otherwise."""
-    if latch:
-        return QoSProfile(
-            depth=1,
-            history=HistoryPolicy.KEEP_LAST,
-            reliability=ReliabilityPolicy.RELIABLE,
-            durability=DurabilityPolicy.TRANSIENT_LOCAL,
-        )
-    if ros_type in SENSOR_TYPES:
-        return QoSProfile(
-            depth=SENSOR_DEPTH, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
-        )
-    return QoSProfile(
-        depth=max(depth or 0, RELIABLE_DEPTH),
-        history=HistoryPolicy.KEEP_LAST,
-        reliability=ReliabilityPolicy.RELIABLE,
-    )
 
 
 def profile_of(qos: Qos) -> QoSProfile:
@@ -227,12 +186,12 @@ class Ros2Link:
         on_peers: Callable[[], None] | None = None,
         qos: Qos | None = None,
     ) -> Publisher:
-        """A publisher of `ros_type` with the bridge's `qos` (else its family's); `on_peers` runs whenever a
-        subscriber matches or leaves."""
+        """A publisher of `ros_type` with the bridge's `qos` (else, a topic of the node's own, the one
+        mapping/qos.py gives it); `on_peers` runs whenever a subscriber matches or leaves."""
         events = None
         if on_peers is not None:
             events = PublisherEventCallbacks(matched=lambda _info: on_peers())
-        profile = qos_for(ros_type, latch=latch, depth=queue_size) if qos is None else profile_of(qos)
+        profile = profile_of(node_topic_qos(latch) if qos is None else qos)
         made = self.node.create_publisher(message_class(ros_type), name, profile, event_callbacks=events)
         return Publisher(self.node, made)
 
@@ -245,13 +204,21 @@ class Ros2Link:
         queue_size: int,
         qos: Qos | None = None,
     ) -> Endpoint:
-        profile = qos_for(ros_type, depth=queue_size) if qos is None else profile_of(qos)
+        profile = profile_of(node_topic_qos(latch=False) if qos is None else qos)
         made = self.node.create_subscription(message_class(ros_type), name, callback, profile)
         return Endpoint(lambda: self.node.destroy_subscription(made))
 
-    def service(self, name: str, srv_type: str, handler: Callable[[Any], Any]) -> tuple[Endpoint, type]:
+    def service(
+        self, name: str, srv_type: str, handler: Callable[[Any], Any], *, qos: Qos | None = None
+    ) -> tuple[Endpoint, type]:
+        """A service with the bridge's `qos` (else the services profile)."""
         srv_class = message_class(srv_type, "srv")
-        made = self.node.create_service(srv_class, name, lambda request, _response: handler(request))
+        made = self.node.create_service(
+            srv_class,
+            name,
+            lambda request, _response: handler(request),
+            qos_profile=profile_of(SERVICE_QOS if qos is None else qos),
+        )
         return Endpoint(lambda: self.node.destroy_service(made)), srv_class.Response
 
     def now(self) -> Any:

@@ -159,7 +159,7 @@ class RosService(Bridge):
 
     def start(self) -> None:
         self.service, self._response = self.parts.ros.service(
-            self.spec.ros, self.spec.ros_type, self.on_request
+            self.spec.ros, self.spec.ros_type, self.on_request, **rule_qos(self.spec)
         )
 
     def on_request(self, request: Any) -> Any:

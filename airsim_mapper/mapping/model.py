@@ -154,5 +154,5 @@ class BridgeSpec:
     params: Mapping[str, Any]
     variables: Mapping[str, str]  # the template variables this bridge was expanded with
     source: Mapping[str, Any]  # the scene element it came from (capture setting, sensor config, ...)
+    qos: Qos  # what a ROS 2 link makes it with (mapping/qos.py's bridge_qos; ROS1 ignores it)
     ros_kind: str = "topic"  # "topic" or "service" (the ROS type lives in <pkg>.srv)
-    qos: Qos = Qos("reliable", "volatile", 10)  # what a ROS 2 link makes it with (ROS1 ignores it)

@@ -1,5 +1,6 @@
 """ROS 2 quality of service in the mapping: the named profiles, a rule's `qos` value made concrete, and
-the QoS each bridge gets.
+the QoS each bridge and each of the node's own topics gets: the one source of these facts for the ROS 2
+link.
 
 A rule's `qos` is a profile name, or a mapping of reliability, durability, depth and history, optionally
 starting from a `profile` that it overrides. Without one, a bridge gets its converter's profile from the
@@ -31,6 +32,7 @@ SETTINGS = ("reliability", "durability", "depth", "history")
 # as its static broadcaster (latched, depth 1).
 TF_QOS = Qos("reliable", "volatile", 100)
 TF_STATIC_QOS = PROFILES[catalog.TRANSIENT_LOCAL]
+SERVICE_QOS = PROFILES[catalog.SERVICES]
 
 
 def qos_of(raw: str | Mapping[str, Any]) -> Qos:
@@ -51,3 +53,9 @@ def bridge_qos(options: Options, converter: str) -> Qos:
         return PROFILES[catalog.TRANSIENT_LOCAL]
     info = catalog.find(converter)
     return PROFILES[info.qos if info else catalog.DEFAULT_QOS]
+
+
+def node_topic_qos(latch: bool) -> Qos:
+    """The QoS of a topic the node makes without a rule (its status topic, /diagnostics): transient_local
+    when latched, else default (both carry state a monitor should not miss)."""
+    return PROFILES[catalog.TRANSIENT_LOCAL if latch else catalog.DEFAULT_QOS]

@@ -1,8 +1,10 @@
 """Property tests: whatever a sim message or ROS request holds, converters either return a message
-that genpy can serialise or raise ConversionError -- never anything else.
+that its ROS can serialise (genpy on ROS1, rclpy's CDR on ROS 2) or raise ConversionError -- never
+anything else.
 
 Every converter's example message comes from its catalogue entry (`ConverterInfo.example`): a new
-converter is covered here as soon as it is in the catalogue."""
+converter is covered here as soon as it is in the catalogue. The same tests run on both flavours: in .venv
+with ROS1's messages, and in .venv-ros2 with ROS 2's (tests/ros2/test_ros2_properties.py runs them there)."""
 
 from __future__ import annotations
 
@@ -18,11 +20,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from std_msgs.msg import Header
 
+from airsim_mapper.common.ros_types import generated_kind
 from airsim_mapper.convert import registry
 from airsim_mapper.convert.catalog import CONVERTERS, SIM_TO_ROS
 from airsim_mapper.convert.command import require_finite
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.errors import ConversionError
+from airsim_mapper.convert.flavour import ROS2
 from airsim_mapper.mapping.model import Limits, Options
 
 VALID: dict[str, dict[str, Any]] = {  # each converter's example message, from the catalogue
@@ -50,7 +54,12 @@ junk = st.recursive(
 
 
 def serialises(msg: Any) -> None:
-    msg.serialize(io.BytesIO())
+    if ROS2:
+        from rclpy.serialization import serialize_message
+
+        serialize_message(msg)
+    else:
+        msg.serialize(io.BytesIO())
 
 
 def run_sim(name: str, msg: Any, ctx: ConvertContext) -> None:
@@ -66,23 +75,38 @@ def test_every_converter_in_the_catalogue_has_an_example():
 
 
 @pytest.mark.parametrize("name", SIM_CONVERTERS)
-def test_every_sim_converters_example_converts_to_a_message_genpy_serialises(name):
+def test_every_sim_converters_example_converts_to_a_message_its_ros_serialises(name):
     for ctx in CONTEXTS:
         serialises(registry.get(name)(copy.deepcopy(VALID[name]), ctx))
 
 
 def ros_message(ros_type: str, fields: dict) -> Any:
     """The ROS message (or service request) of `ros_type` holding `fields`."""
+    if ROS2:
+        from airsim_mapper.engine.ros2_link import message_class
+
+        if generated_kind(ros_type) == "service":
+            return filled(message_class(ros_type, "srv").Request(), fields)
+        return filled(message_class(ros_type)(), fields)
     import genpy.message
 
     from airsim_mapper.engine.ros_link import message_class
 
-    try:
-        cls = message_class(ros_type)
-    except LookupError:
-        cls = message_class(ros_type, "srv")._request_class
-    msg = cls()
+    if generated_kind(ros_type) == "service":
+        msg = message_class(ros_type, "srv")._request_class()
+    else:
+        msg = message_class(ros_type)()
     genpy.message.fill_message_args(msg, [fields])
+    return msg
+
+
+def filled(msg: Any, fields: dict) -> Any:
+    """`msg` with `fields` set, nested dicts into nested messages (ROS 2's classes)."""
+    for name, value in fields.items():
+        if isinstance(value, dict):
+            filled(getattr(msg, name), value)
+        else:
+            setattr(msg, name, value)
     return msg
 
 
@@ -152,6 +176,14 @@ def test_truncated_image_data_only_raises_conversion_error(keep, encoding):
 
 
 floats = st.floats(width=32)
+
+
+def pose_of(position: tuple, q: tuple) -> Pose:
+    """A Pose of an (x, y, z) position and a (w, x, y, z) orientation, built by keyword (both flavours)."""
+    (px, py, pz), (w, x, y, z) = position, q
+    return Pose(position=Point(x=px, y=py, z=pz), orientation=Quaternion(x=x, y=y, z=z, w=w))
+
+
 LIMITED = ConvertContext(
     options=Options(limits=Limits(max_linear_speed=2.0, max_vertical_speed=1.0, max_yaw_rate=1.0))
 )
@@ -160,7 +192,7 @@ LIMITED = ConvertContext(
 @settings(deadline=None)
 @given(floats, floats, floats, floats, st.sampled_from([*CONTEXTS, LIMITED]))
 def test_cmd_vel_returns_finite_bounded_params_or_conversion_error(vx, vy, vz, yaw, ctx):
-    twist = Twist(linear=Vector3(vx, vy, vz), angular=Vector3(0.0, 0.0, yaw))
+    twist = Twist(linear=Vector3(x=vx, y=vy, z=vz), angular=Vector3(x=0.0, y=0.0, z=yaw))
     try:
         params = registry.get("cmd_vel")(twist, ctx)
     except ConversionError:
@@ -179,9 +211,7 @@ def test_cmd_vel_returns_finite_bounded_params_or_conversion_error(vx, vy, vz, y
 )
 def test_pose_commands_return_unit_quaternions_or_conversion_error(position, q, ctx):
     w, x, y, z = q
-    msg = PoseStamped(
-        header=Header(frame_id=""), pose=Pose(position=Point(*position), orientation=Quaternion(x, y, z, w))
-    )
+    msg = PoseStamped(header=Header(frame_id=""), pose=pose_of(position, (w, x, y, z)))
     for name in ("desired_pose", "camera_desired_pose"):
         try:
             params = registry.get(name)(msg, ctx)
@@ -201,7 +231,7 @@ def test_enu_pose_command_round_trips_through_the_pose_converter(position, q):
     if not 0.5 <= norm <= 2.0:
         return
     enu = ConvertContext(convention="enu")
-    msg = PoseStamped(pose=Pose(position=Point(*position), orientation=Quaternion(x, y, z, w)))
+    msg = PoseStamped(pose=pose_of(position, (w, x, y, z)))
     sim = registry.get("desired_pose")(msg, enu)
     back = registry.get("pose")({"time_stamp": 0, **sim}, enu).pose
     assert [back.position.x, back.position.y, back.position.z] == np.asarray(position).tolist()

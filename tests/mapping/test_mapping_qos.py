@@ -15,7 +15,7 @@ from airsim_mapper.mapping.errors import MappingError
 from airsim_mapper.mapping.loader import load_mapping_text
 from airsim_mapper.mapping.model import Qos
 from airsim_mapper.mapping.pipeline import load_and_expand
-from airsim_mapper.mapping.qos import PROFILES, qos_of
+from airsim_mapper.mapping.qos import PROFILES, node_topic_qos, qos_of
 from airsim_mapper.mapping.schema import schema
 
 BEST_EFFORT_5 = Qos("best_effort", "volatile", 5)
@@ -163,6 +163,11 @@ def test_a_latched_rule_without_its_own_qos_is_transient_local(default_bridges):
     assert latched and {b.qos for b in latched} == {LATCHED}
     assert rule_qos("", latch=True) is None  # the rule says nothing: expansion decides
     assert rule_qos("sensor_data", latch=True) == BEST_EFFORT_5  # what a rule says wins
+
+
+def test_the_nodes_own_topics_without_a_rule_are_transient_local_when_latched_else_default():
+    assert node_topic_qos(latch=True) == LATCHED  # the status topic
+    assert node_topic_qos(latch=False) == RELIABLE_10  # /diagnostics
 
 
 def test_the_service_converters_default_to_the_services_profile():

@@ -59,7 +59,7 @@ def summary(msg: object) -> dict:
         out["frames"] = sorted(f"{t.header.frame_id}>{t.child_frame_id}" for t in msg.transforms)
     if hasattr(msg, "returns"):
         out["returns"] = len(msg.returns)
-    if hasattr(msg, "status"):
+    if isinstance(getattr(msg, "status", None), list):  # DiagnosticArray (NavSatFix has one status)
         out["statuses"] = [s.name for s in msg.status]
     if hasattr(msg, "clock"):
         out["clock"] = [msg.clock.sec, msg.clock.nanosec]
