@@ -10,6 +10,7 @@ the bytes once, and a publisher can send them from where they are (`engine.publi
 
 from __future__ import annotations
 
+import array
 import struct
 from typing import Any, Union
 
@@ -62,13 +63,21 @@ def serialize_apart(message: Any, base: type, buff: Any, after: int = 0) -> tupl
 
 def ros2_buffer_message(base: type) -> type:
     """ROS 2's stand-in for a Buffer* class: called as the class is, it makes a message of the rosidl class
-    `base`, with ``data`` handed to rclpy as bytes (`flavour.byte_data`: one copy; rclpy's setter makes the
-    other)."""
+    `base` whose ``data`` is what rclpy's setter would store, an `array.array('B')`, filled with one copy
+    from wherever the bytes lie (through the setter, bytes first: two copies, three in the constructor)."""
     from airsim_mapper.convert.flavour import byte_data
 
     def __new__(cls: type, **fields: Any) -> Any:
-        if "data" in fields:
-            fields["data"] = byte_data(fields["data"])
-        return base(**fields)
+        data = fields.pop("data", None)
+        message = base(**fields)
+        if data is not None:
+            try:
+                flat = memoryview(data).cast("B")
+            except (TypeError, ValueError):  # not one flat buffer (a list of ints, a strided array)
+                flat = byte_data(data)
+            held = array.array("B")
+            held.frombytes(flat)
+            message._data = held
+        return message
 
     return type(f"Buffer{base.__name__}", (), {"__new__": __new__, "__doc__": base.__doc__})

@@ -4,8 +4,8 @@ genpy's generated constructors take keyword arguments through a generic loop and
 with a default object (a Header makes a Time, a Pose a Point and a Quaternion) that the caller then
 replaces. A pose message goes through six of them, on the receive thread, for every robot at 100 Hz.
 These builders set each field of a bare instance once; the result equals (and serialises exactly as)
-the one the constructors give, which tests/convert/test_messages.py checks field by field. ROS 2's classes
-are built with their constructors.
+the one the constructors give, which tests/convert/test_messages.py checks field by field (tests/ros2 on
+ROS 2).
 """
 
 from __future__ import annotations
@@ -44,19 +44,30 @@ def pose_stamped(head: Header, body: Pose) -> PoseStamped:
     return out
 
 
-if ROS2:  # rosidl's classes need their constructors (and a Header has no seq)
+if ROS2:
+    # rosidl's constructors make a default of every sub-message, even one given as an argument, which the
+    # caller's then replaces: a PoseStamped built by keywords makes seven messages to keep four. These set
+    # the fields of a bare instance, as its setters do when field checks are off (a Header has no seq).
 
     def header(stamp: Time, frame_id: str) -> Header:
         """std_msgs/Header of a stamp and a frame."""
-        return Header(stamp=stamp, frame_id=frame_id)
+        out = _new(Header)
+        out._check_fields, out._stamp, out._frame_id = False, stamp, frame_id
+        return out
 
     def pose(x: float, y: float, z: float, qw: float, qx: float, qy: float, qz: float) -> Pose:
         """geometry_msgs/Pose of a position and a (w, x, y, z) quaternion."""
-        return Pose(
-            position=Point(x=float(x), y=float(y), z=float(z)),
-            orientation=Quaternion(x=float(qx), y=float(qy), z=float(qz), w=float(qw)),
-        )
+        position = _new(Point)
+        position._check_fields, position._x, position._y, position._z = False, float(x), float(y), float(z)
+        orientation = _new(Quaternion)
+        orientation._check_fields, orientation._w = False, float(qw)
+        orientation._x, orientation._y, orientation._z = float(qx), float(qy), float(qz)
+        out = _new(Pose)
+        out._check_fields, out._position, out._orientation = False, position, orientation
+        return out
 
     def pose_stamped(head: Header, body: Pose) -> PoseStamped:
         """geometry_msgs/PoseStamped of a header and a pose."""
-        return PoseStamped(header=head, pose=body)
+        out = _new(PoseStamped)
+        out._check_fields, out._header, out._pose = False, head, body
+        return out

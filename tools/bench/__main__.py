@@ -1,6 +1,6 @@
 """`make bench`: converter costs, camera renderers, end-to-end figures, side by side; writes out/bench.json.
 
-python -m tools.bench [--quick] [--costs-only] [--profile] [--out out/bench.json]
+python -m tools.bench [--quick] [--costs-only] [--profile] [--ros 1|2] [--out out/bench.json]
 """
 
 from __future__ import annotations
@@ -33,20 +33,21 @@ def more_rounds(
     rounds: int = LATENCY_ROUNDS,
     first: dict[str, Any] | None = None,
     camera: bool = True,
+    ros: int = 1,
 ) -> list[dict[str, Any]]:
     """`rounds` - 1 more rounds of one case, each through `kinds` (the bridge, the bare forwarder and
     the receive loop alone), in an order rotated by one each round so that a slow spell of the host falls
     on each of them in turn. The first round is the case's main runs (`first`, as `latency_rounds`
     reads them). While fewer than `rounds` rounds were quiet (`quiet_round`), one more is run, up to
     `rounds` more in all. Without `camera` the forwarder and the receive loop subscribe no camera (the
-    bridge subscribes what its probe reads)."""
+    bridge subscribes what its probe reads). `ros`: the flavour of the bridge and the forwarder."""
 
     def bridge(n: int) -> dict[str, Any]:
-        with bench.bridge_session(scene) as session:
+        with bench.bridge_session(scene, ros=ros) as session:
             return session.probe(f"{key}_round{n}", topics)
 
     def forwarder(n: int) -> dict[str, Any]:
-        with bench.forwarder_session(scene, camera=camera) as session:
+        with bench.forwarder_session(scene, camera=camera, ros=ros) as session:
             return session.probe(f"forwarder_{key}_round{n}", topics)
 
     def receive_floor(n: int) -> dict[str, Any]:
@@ -157,6 +158,46 @@ def run_e2e(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS
     return out
 
 
+def run_e2e_ros2(bench: Bench, profile_dir: Path | None, rounds: int = LATENCY_ROUNDS) -> dict[str, Any]:
+    """The ROS 2 rows, in the shape of `run_e2e`'s results: the node in .venv-ros2 beside the bare rclpy
+    forwarder (forwarder_ros2.py) on the same frames, pose only, 1080p and 720p cameras @30 with pose, and
+    ten drones; pose only, 1080p and ten drones in `rounds` interleaved rounds."""
+    out: dict[str, Any] = {"bridge": {}, "pose": {}, "scale": {}, "forwarder": {}, "rounds": {}}
+    floor = out["forwarder"]
+    single = bench.scene("single", 1, scenes.CameraSetup(1920, 1080, 1 / CAMERA_HZ, (0, 1)), lidar=True)
+    hd = bench.scene("hd720", 1, scenes.CameraSetup(1280, 720, 1 / CAMERA_HZ, (0,)))
+    pose_only, camera_topics = [scenes.pose_topic(1)], [scenes.image_topic(1), scenes.pose_topic(1)]
+    profile = str(profile_dir / "bridge_ros2_camera.prof") if profile_dir else None
+    with bench.bridge_session(single, profile=profile, ros=2) as session:
+        out["pose"]["idle"] = session.probe("ros2_pose_idle", pose_only)
+        out["bridge"]["camera"] = session.probe("ros2_camera", camera_topics)
+    with bench.forwarder_session(single, ros=2) as session:
+        floor["pose_idle"] = session.probe("ros2_forwarder_pose_idle", pose_only)
+    with bench.forwarder_session(single, camera=True, ros=2) as session:
+        floor["camera"] = session.probe("ros2_forwarder_camera", camera_topics)
+    for key, topics, camera in (("pose_idle", pose_only, False), ("camera", camera_topics, True)):
+        first = latency_rounds(out, key)[0]
+        out["rounds"][key] = more_rounds(
+            bench, f"ros2_{key}", single, topics, ("bridge", "forwarder"), rounds, first, camera, ros=2
+        )
+    with bench.bridge_session(hd, ros=2) as session:
+        out["bridge"]["camera_720p"] = session.probe("ros2_camera_720p", camera_topics)
+    with bench.forwarder_session(hd, camera=True, ros=2) as session:
+        floor["camera_720p"] = session.probe("ros2_forwarder_camera_720p", camera_topics)
+    drones = SCALE_DRONES[-1]
+    scene = bench.scene(f"scale{drones}", drones, scenes.CameraSetup(320, 240, 1 / SCALE_CAMERA_HZ, (0,)))
+    topics = [t for i in range(1, drones + 1) for t in (scenes.pose_topic(i), scenes.image_topic(i))]
+    with bench.bridge_session(scene, ros=2) as session:
+        out["scale"][str(drones)] = session.probe(f"ros2_scale{drones}", topics)
+    with bench.forwarder_session(scene, camera=True, ros=2) as session:
+        floor["scale"] = session.probe(f"ros2_forwarder_scale{drones}", topics)
+    first = latency_rounds(out, "scale")[0]
+    out["rounds"]["scale"] = more_rounds(
+        bench, f"ros2_scale{drones}", scene, topics, ("bridge", "forwarder"), rounds, first, ros=2
+    )
+    return out
+
+
 def _positive(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -178,7 +219,15 @@ def main(argv: list[str] | None = None) -> int:
         "the quiet ones; a round that lost CPU time to a hypervisor is run again, up to N more (default "
         f"{LATENCY_ROUNDS}; more give steadier figures on a noisy host)",
     )
+    parser.add_argument(
+        "--ros",
+        type=int,
+        choices=(1, 2),
+        help="only the ROS1 rows (with the converter costs and the renderers), or only the ROS 2 rows "
+        "(default: both)",
+    )
     args = parser.parse_args(argv)
+    flavours = (args.ros,) if args.ros else (1, 2)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     started = time.monotonic()
     host_at_start = sampling.host_sample()
@@ -190,32 +239,39 @@ def main(argv: list[str] | None = None) -> int:
             "stolen_share_since_boot": sampling.stolen_share(sampling.HostSample(0, 0), host_at_start),
             "idle_wake_ms": sampling.wake_delays_ms(),
         },
-        "costs": costs.run(),
     }
-    print(tables.costs_table(results["costs"]), flush=True)
-    # the image_transport converters against the library's own encode of the same frame, in this run
-    results["encoders"] = encoders.converter_costs(repeat=5 if args.quick else 30)
-    print(encoders.converter_table(results["encoders"]), flush=True)
-    results["renderers"] = renderers.run()
-    print(renderers.table(results["renderers"]), flush=True)
-    # the server's own camera path: all seven types of one 1280x720 camera, render worker to socket
-    results["server_camera"] = camera_probe.run(seconds=3.0 if args.quick else 8.0)
-    print(camera_probe.table(results["server_camera"]), flush=True)
+    if 1 in flavours:
+        results["costs"] = costs.run()
+        print(tables.costs_table(results["costs"]), flush=True)
+        # the image_transport converters against the library's own encode of the same frame, in this run
+        results["encoders"] = encoders.converter_costs(repeat=5 if args.quick else 30)
+        print(encoders.converter_table(results["encoders"]), flush=True)
+        results["renderers"] = renderers.run()
+        print(renderers.table(results["renderers"]), flush=True)
+        # the server's own camera path: all seven types of one 1280x720 camera, render worker to socket
+        results["server_camera"] = camera_probe.run(seconds=3.0 if args.quick else 8.0)
+        print(camera_probe.table(results["server_camera"]), flush=True)
     if not args.costs_only:
         workdir = Path(tempfile.mkdtemp(prefix="airsim_mapper_bench_"))
         profile_dir = workdir if args.profile else None
         duration = 3.0 if args.quick else 8.0
-        bench = Bench(workdir, warmup_s=2.0, duration_s=duration)
+        bench = Bench(workdir, warmup_s=2.0, duration_s=duration, flavours=flavours)
         try:
-            results["e2e"] = run_e2e(bench, profile_dir, args.rounds)
+            if 1 in flavours:
+                results["e2e"] = run_e2e(bench, profile_dir, args.rounds)
+            if 2 in flavours:
+                results["e2e_ros2"] = run_e2e_ros2(bench, profile_dir, args.rounds)
         finally:
             bench.close()
         results["machine"]["windows"] = bench.windows
         results["machine"]["windows_retaken"] = bench.windows_retaken
         results["workdir"] = str(workdir)
-        print(tables.e2e_table(results["e2e"]), flush=True)
-        raw = {key: results["e2e"]["bridge"][key] for key in ("camera", "depth")}
-        print(transports.table(results["e2e"]["transports"], raw), flush=True)
+        if "e2e" in results:
+            print(tables.e2e_table(results["e2e"]), flush=True)
+            raw = {key: results["e2e"]["bridge"][key] for key in ("camera", "depth")}
+            print(transports.table(results["e2e"]["transports"], raw), flush=True)
+        if "e2e_ros2" in results:
+            print(tables.ros2_table(results["e2e_ros2"]), flush=True)
     results["targets"] = targets.targets(results)
     results["seconds"] = time.monotonic() - started
     results["machine"]["load_average_at_end"] = os.getloadavg()[0]

@@ -1,9 +1,12 @@
 """End-to-end runs: replay server -> bridge node -> probe (three processes), next to the raw transports.
 
-A `Bench` owns one private roscore and a work folder. `bridge_session` starts a replay server and a bridge
-node on a generated scene; `probe` measures the given topics through them while /proc samples the CPU and
-memory of the node (and the server). `rospy_baseline` and `pynng_baseline` measure the bare transports
-with the same probe logic, in the same run.
+A `Bench` owns one private roscore (when it runs ROS1 rows), a ROS 2 domain (when it runs ROS 2 rows) and
+a work folder. `bridge_session` starts a replay server and a bridge node on a generated scene; `probe`
+measures the given topics through them while /proc samples the CPU and memory of the node (and the
+server). Each session runs on one ROS flavour (`ros`, 1 or 2); ROS 2's processes run in .venv-ros2
+(ros2.py): the bridge is `.venv-ros2/bin/airsim-mapper-node`, the probe probe_ros2.py, the bare forwarder
+forwarder_ros2.py. `rospy_baseline` and `pynng_baseline` measure the bare transports with the same probe
+logic, in the same run.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from airsim_mapper.cli.node import WAITING_FOR_SCENE
-from tools.bench import scenes
+from tools.bench import ros2, scenes
 from tools.bench.baselines import RAW_TOPIC
 from tools.bench.probe import DEFAULT_MALLOC
 from tools.bench.sampling import (
@@ -79,6 +82,7 @@ class Session:
     server: Child
     node: Child
     role: str = "bridge"  # the node's name in the results: bridge, or forwarder (the floor)
+    ros: int = 1
 
     def probe(
         self, label: str, topics: Sequence[str], apart: Sequence[str] = (), malloc: str = DEFAULT_MALLOC
@@ -87,32 +91,45 @@ class Session:
         `apart` topics are read by a second probe process at the same time (see `Bench.measure`), each
         probe with `malloc`'s thresholds (probe.py)."""
         watched = {self.role: self.node, "server": self.server}
-        return self.bench.measure(label, topics, watched, apart, malloc)
+        return self.bench.measure(label, topics, watched, apart, malloc, self.ros)
 
 
 @dataclass
 class Bench:
     """`retakes`: how many more times a window that was not quiet is measured (`quietest`).
-    `windows` and `windows_retaken` count the windows measured and those taken again."""
+    `windows` and `windows_retaken` count the windows measured and those taken again. `flavours`: the
+    ROS flavours the bench runs rows of."""
 
     workdir: Path
     warmup_s: float = 2.0
     duration_s: float = 8.0
     retakes: int = 2
+    flavours: tuple[int, ...] = (1,)
     windows: int = field(default=0, init=False)
     windows_retaken: int = field(default=0, init=False)
 
     def __post_init__(self) -> None:
         self.procs = Rig(self.workdir)
         self.config_dir = self.workdir / "sim_config"
-        self.roscore = self.procs.roscore()
+        self.roscore = self.procs.roscore() if 1 in self.flavours else None
+        self.domain = ros2.claim_domain() if 2 in self.flavours else None
 
     def close(self) -> None:
         self.procs.stop_all()
+        if self.domain is not None:
+            self.domain.release()
 
-    def module(self, name: str, module: str, *args: str) -> Child:
-        """Run `python -m module args` in the bench's rig."""
-        return self.procs.python(name, ["-m", module, *args])
+    def python(self, name: str, args: Sequence[str], ros: int = 1) -> Child:
+        """Run Python with `args` in the bench's rig: .venv's, or on ROS 2 .venv-ros2's in its domain."""
+        if ros == 1:
+            return self.procs.python(name, args)
+        if self.domain is None:
+            raise BenchError("a ROS 2 run in a bench made without ROS 2 among its flavours")
+        return self.procs.start(name, [*ros2.interpreter(), *args], env=ros2.environment(self.domain.number))
+
+    def module(self, name: str, module: str, *args: str, ros: int = 1) -> Child:
+        """Run `python -m module args` in the bench's rig (on ROS 2: in .venv-ros2)."""
+        return self.python(name, ["-m", module, *args], ros)
 
     # -- measuring
 
@@ -123,13 +140,15 @@ class Bench:
         watched: dict[str, Child],
         apart: Sequence[str] = (),
         malloc: str = DEFAULT_MALLOC,
+        ros: int = 1,
     ) -> dict[str, Any]:
-        """The probe's result for `topics`, with the `apart` topics (images, say) read by a second probe
-        process whose window spans the first's, their figures merged in: a subscriber of `topics` that
-        does not also hold the GIL to read large messages, as in a ROS graph where each node reads its own.
+        """The probe's result for `topics` (probe.py, or probe_ros2.py on ROS 2), with the `apart` topics
+        (images, say) read by a second probe process whose window spans the first's, their figures merged
+        in: a subscriber of `topics` that does not also hold the GIL to read large messages, as in a ROS
+        graph where each node reads its own.
         A window in which a hypervisor took QUIET_STOLEN_SHARE of the CPU time or more is measured again,
         up to `retakes` times (`quietest`)."""
-        return self._quiet_window(lambda: self._measure_once(label, topics, watched, apart, malloc))
+        return self._quiet_window(lambda: self._measure_once(label, topics, watched, apart, malloc, ros))
 
     def _quiet_window(self, measure: Callable[[], dict[str, Any]]) -> dict[str, Any]:
         """`measure`'s quietest window (`quietest`), counted in `windows` and `windows_retaken`."""
@@ -145,6 +164,7 @@ class Bench:
         watched: dict[str, Child],
         apart: Sequence[str],
         malloc: str,
+        ros: int,
     ) -> dict[str, Any]:
         if set(topics) & set(apart):
             raise BenchError(f"topics both read together and apart: {sorted(set(topics) & set(apart))}")
@@ -152,9 +172,9 @@ class Bench:
         try:
             if apart:
                 span = self.warmup_s + self.duration_s + APART_MARGIN_S
-                other = self._probe(f"{label}_apart", apart, span, malloc)
+                other = self._probe(f"{label}_apart", apart, span, malloc, ros)
                 wait_line(other[0], "measuring", FIRST_MESSAGE_TIMEOUT_S + 30)
-            probe, out = self._probe(label, topics, self.duration_s, malloc)
+            probe, out = self._probe(label, topics, self.duration_s, malloc, ros)
             try:
                 result = self._collect(probe, out, watched)
             finally:
@@ -167,12 +187,15 @@ class Bench:
             if other is not None:
                 self.procs.stop(other[0])
 
-    def _probe(self, label: str, topics: Sequence[str], duration_s: float, malloc: str) -> tuple[Child, Path]:
+    def _probe(
+        self, label: str, topics: Sequence[str], duration_s: float, malloc: str, ros: int
+    ) -> tuple[Child, Path]:
         out = self.workdir / f"probe_{label}.json"
         out.unlink(missing_ok=True)  # a result of an earlier run under the same label is not this one's
         args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(duration_s)]
         args += ["--first-timeout", str(FIRST_MESSAGE_TIMEOUT_S), "--malloc", malloc, *topics]
-        return self.module(f"probe_{label}", "tools.bench.probe", *args), out
+        module = "tools.bench.probe" if ros == 1 else "tools.bench.probe_ros2"
+        return self.module(f"probe_{label}", module, *args, ros=ros), out
 
     @staticmethod
     def _result(out: Path) -> dict[str, Any]:
@@ -224,10 +247,19 @@ class Bench:
         decode: str = "bridge",
         profile: str | None = None,
         node_args: Sequence[str] = (),
+        ros: int = 1,
     ) -> Iterator[Session]:
-        args = ["--as", runner, "--decode", decode, "--nodename", "bench_bridge"]
-        args += [*(["--profile", profile] if profile else []), *node_args]
-        with self._replay_client("bridge", "tools.bench.node", scene_file, "bridge", args) as session:
+        """The bridge on a replay server: on ROS1 tools.bench.node's `runner` (the node or a mission script)
+        with `decode`; on ROS 2 `.venv-ros2/bin/airsim-mapper-node` as users start it, or under cProfile
+        (profiling.py) with `profile`."""
+        if ros == 1:
+            args = ["--as", runner, "--decode", decode, "--nodename", "bench_bridge"]
+            args += [*(["--profile", profile] if profile else []), *node_args]
+            program = ["-m", "tools.bench.node"]
+        else:
+            args = ["--nodename", "bench_bridge", *node_args]
+            program = ["-m", "tools.bench.profiling", profile] if profile else [str(ros2.ROS2_NODE)]
+        with self._replay_client("bridge", program, scene_file, "bridge", args, ros) as session:
             yield session
 
     def waiting_node(self) -> dict[str, Any]:
@@ -235,7 +267,8 @@ class Bench:
         (from its threads' schedstat, `sampling.threads_cpu_s`) and RSS over a window in which nothing
         arrives and nothing is published; a window that was not quiet is measured again, as any other."""
         args = ["--nodename", "bench_waiting"]
-        with self._replay_client("waiting_bridge", "tools.bench.node", None, "bridge", args) as session:
+        program = ["-m", "tools.bench.node"]
+        with self._replay_client("waiting_bridge", program, None, "bridge", args) as session:
             node = session.node
             wait_until(lambda: WAITING_FOR_SCENE in node.output(), FIRST_MESSAGE_TIMEOUT_S, "the node")
             time.sleep(self.warmup_s)
@@ -254,10 +287,12 @@ class Bench:
             return self._quiet_window(window)
 
     @contextlib.contextmanager
-    def forwarder_session(self, scene_file: str, camera: bool = False) -> Iterator[Session]:
-        """The bare forwarder (forwarder.py) on a replay server: the floor of the bridge's figures."""
+    def forwarder_session(self, scene_file: str, camera: bool = False, ros: int = 1) -> Iterator[Session]:
+        """The bare forwarder (forwarder.py, on ROS 2 forwarder_ros2.py) on a replay server: the floor of
+        the bridge's figures."""
         args = ["--camera"] if camera else []
-        client = self._replay_client("forwarder", "tools.bench.forwarder", scene_file, "forwarder", args)
+        program = ["-m", "tools.bench.forwarder" if ros == 1 else "tools.bench.forwarder_ros2"]
+        client = self._replay_client("forwarder", program, scene_file, "forwarder", args, ros)
         with client as session:
             yield session
 
@@ -268,24 +303,30 @@ class Bench:
         out.unlink(missing_ok=True)  # each round of a scene writes here: wait for this round's
         args = ["--out", str(out), "--warmup", str(self.warmup_s), "--duration", str(self.duration_s)]
         args += ["--camera"] if camera else []
-        module = "tools.bench.receive_floor"
-        with self._replay_client("receive_floor", module, scene_file, "receiver", args) as session:
+        program = ["-m", "tools.bench.receive_floor"]
+        with self._replay_client("receive_floor", program, scene_file, "receiver", args) as session:
             return self._collect(session.node, out, {"server": session.server})
 
     @contextlib.contextmanager
     def _replay_client(
-        self, name: str, module: str, scene_file: str | None, role: str, args: Sequence[str]
+        self,
+        name: str,
+        program: Sequence[str],
+        scene_file: str | None,
+        role: str,
+        args: Sequence[str],
+        ros: int = 1,
     ) -> Iterator[Session]:
-        """`module` run as `name` against a fresh replay server on `scene_file` (None: no scene given),
-        both stopped afterwards."""
+        """`program` (Python's arguments before `args`: `-m module`, or a script) run as `name` on ROS `ros`
+        against a fresh replay server on `scene_file` (None: no scene given), both stopped afterwards."""
         server, topics_port, services_port = self._replay_server("WARNING")
         client: Child | None = None
         try:
             wait_until(lambda: port_open(topics_port) and port_open(services_port), 30, "the replay server")
             ports = ["--topicsport", str(topics_port), "--servicesport", str(services_port)]
             scene = ["--simconfigpath", str(self.config_dir), "--scene", scene_file] if scene_file else []
-            client = self.module(name, module, *ports, *scene, *args)
-            yield Session(self, server, client, role=role)
+            client = self.python(name, [*program, *ports, *scene, *args], ros)
+            yield Session(self, server, client, role=role, ros=ros)
         finally:
             if client is not None:
                 self.procs.stop(client)

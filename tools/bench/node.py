@@ -13,43 +13,14 @@ every thread.
 
 from __future__ import annotations
 
-import contextlib
-import cProfile
-import pstats
 import signal
 import sys
 import threading
-from typing import Any
 
 from airsim_mapper import wrapper
 from airsim_mapper.cli import node
 from airsim_mapper.engine import receive
-
-
-def profile_all_threads() -> list[cProfile.Profile]:
-    """cProfile every thread started from now on (each thread enables its own profiler on first call)."""
-    profiles: list[cProfile.Profile] = []
-
-    def start(_frame: Any, _event: str, _arg: Any) -> None:
-        profile = cProfile.Profile()
-        profiles.append(profile)
-        profile.enable()
-
-    threading.setprofile(start)
-    main_profile = cProfile.Profile()
-    profiles.append(main_profile)
-    main_profile.enable()
-    return profiles
-
-
-def dump_profiles(profiles: list[cProfile.Profile], path: str) -> None:
-    for profile in profiles:
-        profile.disable()
-    stats = pstats.Stats(profiles[0])
-    for profile in profiles[1:]:
-        with contextlib.suppress(TypeError):  # a profiler that never saw a call has no stats
-            stats.add(profile)
-    stats.dump_stats(path)
+from tools.bench.profiling import dump_profiles, profile_all_threads
 
 
 def _option(args: list[str], name: str, default: str | None) -> str | None:

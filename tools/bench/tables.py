@@ -10,6 +10,7 @@ from tools.bench.results import (
     judged_rounds,
     kind,
     latency_rounds,
+    of_kind,
     p99_ratio,
     pairs,
     per_message_cpu_ms,
@@ -177,7 +178,7 @@ def e2e_table(e2e: dict[str, Any]) -> str:
     return text + "\n\n" + scale + ("\n\n" + floor_table(e2e) + rounds_table(e2e) if floor else "")
 
 
-def floor_table(e2e: dict[str, Any]) -> str:
+def floor_table(e2e: dict[str, Any], title: str = "bridge / bare forwarder (same frames, same run)") -> str:
     """Each case through the bridge and through the bare forwarder, in the same run, and their ratios."""
     rows = []
     for _key, label, ours, floor in pairs(e2e):
@@ -197,7 +198,7 @@ def floor_table(e2e: dict[str, Any]) -> str:
         )
     return table(
         [
-            "bridge / bare forwarder (same frames, same run)",
+            title,
             "CPU cores",
             "CPU ratio",
             "pose Hz (slowest)",
@@ -247,6 +248,33 @@ def rounds_table(e2e: dict[str, Any]) -> str:
         "CPU time stolen %",
     ]
     return "\n\n" + table(header, rows)
+
+
+def ros2_table(e2e: dict[str, Any]) -> str:
+    """The ROS 2 rows (`run_e2e_ros2`'s results): each case through the node in .venv-ros2 and through the
+    bare rclpy forwarder, their ratios, the images each delivered to the probe, and every round."""
+    images = [
+        [
+            label,
+            " / ".join(_slowest_image(result) for result in (ours, floor)),
+            " / ".join(_image_latency(result) for result in (ours, floor)),
+        ]
+        for _key, label, ours, floor in pairs(e2e)
+        if of_kind(ours, "image")
+    ]
+    header = ["ROS 2 images delivered (best effort)", "Hz (slowest): bridge / forwarder", "p50 ms (largest)"]
+    title = "ROS 2: bridge / bare rclpy forwarder (same frames, same run)"
+    return floor_table(e2e, title) + "\n\n" + table(header, images) + rounds_table(e2e)
+
+
+def _slowest_image(result: dict[str, Any]) -> str:
+    return f"{min(t['rate_hz'] for t in of_kind(result, 'image')):.1f}"
+
+
+def _image_latency(result: dict[str, Any]) -> str:
+    """The image topics' largest p50 latency, in ms ("-" when none delivered in the window)."""
+    known = [t["latency_p50_ms"] for t in of_kind(result, "image") if "latency_p50_ms" in t]
+    return ms(max(known) if known else None)
 
 
 def _stolen(result: dict[str, Any] | None) -> str:

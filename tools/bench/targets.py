@@ -36,6 +36,10 @@ SCALE_POSE_P99_MS = 4.0  # the ten drones' worst pose p99 target
 SCALE_CORES = 0.25  # the ten drones' CPU target
 CAMERA_P99_RATIO = 0.8  # pose p99 under a 1080p camera @30 over the bare forwarder's
 JPEG_LIBRARY_RATIO = 1.2  # the JPEG converter's CPU per frame over the library's own encode
+ROS2_CPU_RATIO = 1.2  # the ROS 2 node's CPU over the bare rclpy forwarder's, each case
+ROS2_P99_RATIO = 1.0  # the ROS 2 node's pose p99 under a 1080p camera @30 over the rclpy forwarder's
+ROS2_CPU_CASES = (("pose_idle", "pose only"), ("camera_720p", "720p camera @30 + pose"))
+ROS2_CPU_CASES += (("camera", "1080p camera @30 + pose"), ("scale", "10 drones"))
 
 
 @dataclass(frozen=True)
@@ -273,9 +277,58 @@ def cost_targets(costs: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
     ]
 
 
+def ros2_targets(e2e: dict[str, Any]) -> list[dict[str, Any]]:
+    """The ROS 2 rows' targets (`run_e2e_ros2`'s results), each against the bare rclpy forwarder in the same
+    run, on the median of a case's quiet rounds where it had rounds: the node's CPU per case (pose only's
+    over each one's probe, as on ROS1), the pose p99 under the 1080p camera, and the ten drones' slowest
+    pose delivered."""
+    both = {key: (ours, floor) for key, _label, ours, floor in pairs(e2e)}
+    out: list[dict[str, Any]] = []
+    for key, label in ROS2_CPU_CASES:
+        if key not in both:
+            continue
+        every = latency_rounds(e2e, key)
+        rounds = judged_rounds(every)
+        per_probe = key == "pose_idle"
+        cores = [(r["bridge"]["bridge_cpu_cores"], r["forwarder"]["forwarder_cpu_cores"]) for r in rounds]
+        ratios = [ratio(*pair) for pair in cores]
+        if per_probe:
+            ratios = [_pose_cpu_ratio(r["bridge"], r["forwarder"]) for r in rounds]
+        note = _rounds_note(ratios, times, "cores: ", len(every) - len(rounds))
+        note += ", ".join(f"{ours:.3f} / {floor:.3f}" for ours, floor in cores)
+        note += " (each over its probe's CPU in the window)" if per_probe else ""
+        name = f"ROS 2 {label}: bridge CPU / the rclpy forwarder's"
+        out.append(_limit(name, median_of(ratios), ROS2_CPU_RATIO, "x", note))
+    if "camera" in both:
+        every = latency_rounds(e2e, "camera")
+        rounds = judged_rounds(every)
+        name = "ROS 2 pose p99 under a 1080p camera @30 / the rclpy forwarder's"
+        note = _p99_note(*both["camera"])
+        out.append(_p99_ratio_target(name, rounds, len(every) - len(rounds), ROS2_P99_RATIO, note))
+    if "scale" in both:
+        every = latency_rounds(e2e, "scale")
+        rounds = judged_rounds(every)
+        rates = [worst_pose(r["bridge"])[0] for r in rounds]
+        cameras = [min(t["rate_hz"] for t in of_kind(r["bridge"], "image")) for r in rounds]
+        note = _rounds_note(rates, lambda r: f"{r:.1f} Hz", None, len(every) - len(rounds))
+        note += f"; slowest camera {median(cameras):.1f} Hz, the forwarder's slowest pose "
+        note += f"{median(worst_pose(r['forwarder'])[0] for r in rounds):.1f} Hz"
+        drones = len(of_kind(rounds[0]["bridge"], "pose"))
+        name = f"ROS 2 {drones} drones: slowest pose delivered"
+        out.append(_least(name, median(rates), 0.9 * POSE_HZ, "Hz", note.lstrip("; ")))
+    return out
+
+
 def targets(results: dict[str, Any]) -> list[dict[str, Any]]:
-    """Every target with the measured value, the limit and whether it is met."""
-    out = cost_targets(results["costs"]) + transport_targets(results)
+    """Every target with the measured value, the limit and whether it is met (those of the rows a run
+    measured)."""
+    return ros1_targets(results) + ros2_targets(results.get("e2e_ros2") or {})
+
+
+def ros1_targets(results: dict[str, Any]) -> list[dict[str, Any]]:
+    """The targets of the converter costs, the renderers and the ROS1 rows."""
+    out = cost_targets(results["costs"]) if "costs" in results else []
+    out += transport_targets(results)
     if "renderers" in results:
         for name, value, limit in renderers.targets(results["renderers"]):
             out.append(_least(name, value, limit, "/s", "headless server, OpenGL on llvmpipe"))

@@ -361,6 +361,7 @@ class _RecordingBench:
         self.runs: list[str] = []
         self.stolen = stolen or {}
         self.cameras: list[bool] = []  # what the forwarder's and the receive loop's runs were asked
+        self.flavours: list[int] = []  # the ROS flavour each bridge and forwarder session was asked for
 
     def _measured(self, label: str, kind: str) -> dict:
         self.runs.append(label)
@@ -381,11 +382,13 @@ class _RecordingBench:
 
         return Session()
 
-    def bridge_session(self, scene: str):
+    def bridge_session(self, scene: str, ros: int = 1):
+        self.flavours.append(ros)
         return self._session("bridge")
 
-    def forwarder_session(self, scene: str, camera: bool):
+    def forwarder_session(self, scene: str, camera: bool, ros: int = 1):
         self.cameras.append(camera)
+        self.flavours.append(ros)
         return self._session("forwarder")
 
     def receive_floor(self, scene: str, camera: bool) -> dict:
@@ -473,3 +476,11 @@ def test_the_bench_takes_at_least_one_round(given, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["--rounds", given, "--costs-only"])
     assert stop.value.code == 2 and "--rounds" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("ros", [1, 2])
+def test_more_rounds_run_the_bridge_and_the_forwarder_on_the_flavour_asked(ros):
+    bench = _RecordingBench()
+    kinds = ("bridge", "forwarder")
+    more_rounds(bench, "camera", "scene.jsonc", [POSE], kinds, rounds=2, ros=ros)  # type: ignore[arg-type]
+    assert bench.flavours == [ros, ros]
