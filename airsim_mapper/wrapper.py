@@ -4,9 +4,10 @@ AirSim ROS bridge documentation describes), on ROS1 and on ROS 2.
 The flavour is the one the converters build messages for (`convert.flavour`): ROS1 where genpy is
 importable (`.venv`), ROS 2 where only rclpy is (`.venv-ros2`), as the node chooses without `--ros`.
 On ROS1, call `rospy.init_node` first. On ROS 2, call `rclpy.init` first and pass the script's node
-(`node=`), or the wrapper makes one named `node_name` (default "projectairsim"); either way the wrapper
-spins it with an executor on a thread of its own, sends the bridge's and the client's log to its logger
-(console and /rosout), and shuts down with rclpy's context.
+(`node=`), or the wrapper makes one named `node_name` (default "projectairsim", with the shipped Fast DDS
+profile unless the user chose one: `common/dds_profile.py`); either way the wrapper spins it with an
+executor on a thread of its own, sends the bridge's and the client's log to its logger (console and
+/rosout), and shuts down with rclpy's context.
 
 Without a scene the wrapper runs the node's own bridges (load_scene) and waits for one. The wrapper either
 creates its own client (kept in `projectairsim_client` and disconnected at ROS shutdown) or takes one (then
@@ -30,6 +31,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+from airsim_mapper.common.dds_profile import use_shipped_profile
 from airsim_mapper.common.errors import AirsimMapperError
 from airsim_mapper.common.logs import caller_logger, ros_logger, wait_for_rosout
 from airsim_mapper.common.ports import SERVICES_PORT, TOPICS_PORT
@@ -128,10 +130,13 @@ class Ros2Node:
         from airsim_mapper.engine.ros2_node import Spinner, log_to
 
         self._made = node is None
+        profile = use_shipped_profile() if node is None else ""  # a script's node has its participant
         self.node = rclpy.create_node(node_name or DEFAULT_NODE_NAME) if node is None else node
         self.name, self.namespace = self.node.get_fully_qualified_name(), self.node.get_namespace()
         self.link = Ros2Link(self.node)
         self._log = log_to(self.node)
+        if profile:
+            log.info(profile)
         self._spinner = Spinner(self.node)
         self._spinner.start()
 

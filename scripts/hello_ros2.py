@@ -51,13 +51,16 @@ def run(argv: list[str]) -> int:
     from rclpy.signals import SignalHandlerOptions
     from rclpy.utilities import remove_ros_args
 
+    from airsim_mapper.common.dds_profile import use_shipped_profile
     from airsim_mapper.wrapper import ProjectAirSimWrapper, redirect_client_log
 
     args = parse_args(remove_ros_args(argv)[1:])
+    profile = use_shipped_profile()  # Fast DDS's shared memory fits 1080p frames, unless the user chose
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)  # the script stops itself
     node = rclpy.create_node(args.nodename or NODE_NAME)
     try:
         redirect_client_log(node)  # the client's log, the bridge's and this script's on the node's logger
+        log.info(profile)
         quiet_closed_contexts()
         client = ProjectAirSimClient(args.address, args.topicsport, args.servicesport)
         client.connect()

@@ -19,6 +19,7 @@ from typing import Any
 
 from airsim_mapper.cli.settings import SETTINGS, SettingError, given_settings, resolve_settings, values
 from airsim_mapper.cli.startup import Stopper, connect
+from airsim_mapper.common.dds_profile import use_shipped_profile
 from airsim_mapper.common.errors import ConfigError
 from airsim_mapper.common.logs import ros_logger
 
@@ -50,11 +51,13 @@ def main(argv: list[str], stop: Stopper, parse_args: Callable[[list[str]], Any],
 
     args = parse_args(remove_ros_args(argv)[1:])
     stop.timeout = args.shutdown_timeout
+    profile = use_shipped_profile()  # before rclpy makes its participant
     rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     node = rclpy.create_node(
         args.nodename or DEFAULT_NODE_NAME, automatically_declare_parameters_from_overrides=True
     )
     handler = log_to(node)
+    log.info(profile)
     redirect_client_log()
     spinner = Spinner(node)
     spinner.start()

@@ -16,7 +16,10 @@ from airsim_mapper.common.logs import ros_logger
 __all__ = ["ROSOUT_LOGGER", "RclpyHandler", "Spinner", "log_to", "spin"]
 
 ROSOUT_LOGGER = "rosout"  # the parent of the bridge's loggers (`ros_logger`), the client's forwarded log too
-SPIN_S = 0.5  # the executor's wait, between checks that rclpy still runs
+# The executor's longest wait. Nothing waits for it to end: stop() wakes the executor, rclpy's shutdown wakes
+# it (the executor's on_shutdown), and a node that adds or removes an endpoint wakes it; each wake costs a
+# rebuild of the wait set, so a long one spares the idle node's CPU.
+SPIN_S = 5.0
 EXECUTOR_THREADS = 4
 log = ros_logger("airsim_mapper.node")
 
@@ -106,5 +109,5 @@ class Spinner:
         self._stop.set()  # the spin loop ends first: a shut-down executor refuses the callbacks it finds
         self.executor.wake()  # its wait ends now, not after SPIN_S
         if self._thread.is_alive():
-            self._thread.join(timeout=SPIN_S + timeout)
+            self._thread.join(timeout=timeout)
         self.executor.shutdown(timeout_sec=timeout)

@@ -5,7 +5,8 @@ The real projectairsim client, its own receive loop and msgpack decoding, and on
 topic: each robot's `actual_pose` as a PoseStamped and (with `--camera`) its `Cam/scene_camera` as an Image
 on the bridge's topic names, with the QoS the bridge offers them (the default mapping latches the pose:
 reliable, transient-local, depth 1; images `sensor_data`), so the same probe reads both. No mapping, no tf,
-no camera_info, no diagnostics, no executor, no process tuning.
+no camera_info, no diagnostics, no executor, no process tuning; Fast DDS's profile is the node's
+(`common/dds_profile.py`).
 
     python -m tools.bench.forwarder_ros2 --topicsport P --servicesport S --simconfigpath DIR --scene FILE
         [--camera]
@@ -17,6 +18,7 @@ import signal
 import threading
 from typing import Any
 
+from airsim_mapper.common.dds_profile import use_shipped_profile
 from tools.bench.forwarder import IMAGE_ENCODINGS, load_scene, scene_arguments
 
 NANOSECONDS = 1_000_000_000
@@ -63,6 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = scene_arguments(__doc__.splitlines()[0])
     parser.add_argument("--camera", action="store_true", help="also forward each robot's scene image")
     args = parser.parse_args(argv)
+    use_shipped_profile()  # the node's Fast DDS profile: the floor carries the same frames the same way
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = rclpy.create_node("bench_forwarder")
     latched = QoSProfile(
