@@ -2,10 +2,10 @@
 
 rclpy's `publish` of a message copies each field into the type's C struct (reading every attribute through
 its Python property) before the DDS type support serialises the struct; given `bytes`, it hands them to
-DDS as an already serialised message. For the small messages every robot sends at its pose rate
-(geometry_msgs/PoseStamped, tf2_msgs/TFMessage) the bytes are written here with `struct` from the message
-the converter built, so the converters stay what says what a message holds; anything else is published as
-the message.
+DDS as an already serialised message. For the small messages sent at the pose rate (geometry_msgs/
+PoseStamped, tf2_msgs/TFMessage, rosgraph_msgs/Clock) the bytes are written here with `struct` from the
+message the converter built, so the converters stay what says what a message holds; anything else is
+published as the message.
 
 The bytes are what rclpy's `serialize_message` gives: the encapsulation header of little-endian plain CDR
 (XCDR1), then the fields in order, each aligned to its size (doubles to 8) counted from after that header;
@@ -78,6 +78,12 @@ def tf_transforms(transforms: list[Any]) -> bytes:
     return bytes(out)
 
 
+def clock(message: Any) -> bytes:
+    """rosgraph_msgs/Clock as CDR."""
+    stamp = message.clock
+    return ENCAPSULATION + STAMP.pack(stamp.sec, stamp.nanosec)
+
+
 def writer(message_class: type) -> Writer | None:
     """The CDR writer of a message class, None for a class that is published as a message."""
     name = f"{message_class.__module__.split('.')[0]}/{message_class.__name__}"
@@ -87,4 +93,5 @@ def writer(message_class: type) -> Writer | None:
 WRITERS: dict[str, Writer] = {
     "geometry_msgs/PoseStamped": pose_stamped,
     "tf2_msgs/TFMessage": tf_message,
+    "rosgraph_msgs/Clock": clock,
 }

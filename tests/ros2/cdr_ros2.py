@@ -16,6 +16,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.serialization import deserialize_message, serialize_message
 from tf2_msgs.msg import TFMessage
 
+from airsim_mapper.convert.clock import clock
 from airsim_mapper.convert.context import ConvertContext
 from airsim_mapper.convert.pose import robot_pose
 from airsim_mapper.engine import ros2_cdr
@@ -71,12 +72,21 @@ def test_transforms_are_written_as_rclpy_serialises_their_tf_message(cases: list
     assert_rclpy_bytes(ours, message)
 
 
+@settings(max_examples=100, deadline=None)
+@given(sim_poses)
+def test_a_clock_is_written_as_rclpy_serialises_it(sim: dict) -> None:
+    message = clock(sim, ConvertContext())
+    assert_rclpy_bytes(ros2_cdr.clock(message), message)
+
+
 def test_only_the_per_pose_types_have_a_writer() -> None:
     from geometry_msgs.msg import TransformStamped
     from nav_msgs.msg import Odometry
+    from rosgraph_msgs.msg import Clock
 
     assert ros2_cdr.writer(PoseStamped) is ros2_cdr.pose_stamped
     assert ros2_cdr.writer(TFMessage) is ros2_cdr.tf_message
+    assert ros2_cdr.writer(Clock) is ros2_cdr.clock
     assert ros2_cdr.writer(TransformStamped) is None and ros2_cdr.writer(Odometry) is None
 
 

@@ -27,4 +27,4 @@ def test_poses_and_transforms_written_as_cdr_are_rclpys_bytes_and_reach_a_subscr
     )
     assert run.returncode == 0, run.stdout[-5000:] + run.stderr[-2000:]
     summary = run.stdout.strip().splitlines()[-1]
-    assert "4 passed" in summary and "skipped" not in summary, summary
+    assert "5 passed" in summary and "skipped" not in summary, summary
