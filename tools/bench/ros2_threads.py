@@ -1,7 +1,8 @@
 """Where the ROS 2 node's CPU goes, thread by thread, beside the bare rclpy forwarder's: pose only @100.
 
 `.venv/bin/python -m tools.bench.ros2_threads [--rounds N] [--seconds S]` runs the bench's replay server,
-then the node and the forwarder in turn, each while the bench's probe reads the pose, and prints each
+then the node and the forwarder in turn, each while the bench's probe reads the pose (a second time, after
+a first that waits for the pose to flow), and prints each
 process's cores and its busiest threads (by their OS names: the Python threads are `python`, the receive
 thread the busiest of them) from `/proc/<pid>/task/*/schedstat` read at both ends of a window inside the
 probe's.
@@ -46,6 +47,7 @@ def window(session: Session, label: str, seconds: float) -> str:
         after, elapsed = thread_cpu_ns(pid), time.monotonic() - start
         cores.update({key: (ns - before[key]) / 1e9 / elapsed for key, ns in after.items() if key in before})
 
+    session.probe(f"{label}_warm", [scenes.pose_topic(1)])  # returns once the node has been publishing
     sampler = threading.Thread(target=sample)
     sampler.start()
     session.probe(label, [scenes.pose_topic(1)])
