@@ -20,6 +20,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from airsim_mapper.common.geometry import q_conjugate, q_mul, q_normalized, q_rotate
 from airsim_mapper.common.ros_types import generated_kind
 from airsim_mapper.engine.errors import EngineError, RosTypeError
+from airsim_mapper.engine.ros2_cdr import tf_transforms, writer
 from airsim_mapper.engine.tf_poses import FrameUnknown, moved_pose, transform_from_pose
 from airsim_mapper.mapping.model import Qos
 from airsim_mapper.mapping.qos import SERVICE_QOS, TF_QOS, TF_STATIC_QOS, node_topic_qos
@@ -68,13 +69,18 @@ def publish(publisher: Any, message: Any) -> None:
 
 
 class Publisher:
-    """An rclpy publisher with rospy's face: `publish`, `get_num_connections`, `unregister`."""
+    """An rclpy publisher with rospy's face: `publish`, `get_num_connections`, `unregister`. A message of
+    a type engine/ros2_cdr.py writes goes to rclpy as its CDR bytes."""
 
     def __init__(self, node: Any, rclpy_publisher: Any) -> None:
         self._node, self._publisher = node, rclpy_publisher
         self._lock = threading.Lock()
+        self._type = rclpy_publisher.msg_type
+        self._write = writer(self._type)
 
     def publish(self, message: Any) -> None:
+        if self._write is not None and type(message) is self._type:
+            message = self._write(message)
         with self._lock:
             if self._publisher is None:
                 raise ClosedEndpoint("the publisher was destroyed")
@@ -236,7 +242,7 @@ class Ros2Link:
         if transforms:
             if self._lookups:
                 self.frames.add(transforms)
-            self._tf.publish(self._tf_message(transforms=transforms))
+            self._tf.publish(tf_transforms(transforms))
 
     def tf_wanted(self) -> bool:
         return self._lookups or self._tf.get_subscription_count() > 0
