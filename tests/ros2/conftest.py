@@ -7,16 +7,13 @@ taken from the process id. Discovery stays on localhost.
 
 from __future__ import annotations
 
-import fcntl
-import os
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from ros2kit import ROS2_PYTHON
 
-DOMAIN_LOCKS = Path("/tmp/airsim-mapper-ros2-domains")
-DOMAINS = range(1, 102)  # Fast DDS's ports fit domains 0-232; 0 is everyone's default
+from tools.bench.ros2 import Ros2Unavailable, claim_domain
 
 
 @pytest.fixture(scope="session")
@@ -29,20 +26,12 @@ def ros2_python() -> Path:
 
 @pytest.fixture
 def ros_domain() -> Iterator[int]:
-    """A ROS_DOMAIN_ID no other test on this machine uses while this one runs."""
-    DOMAIN_LOCKS.mkdir(exist_ok=True)
-    start = os.getpid() % len(DOMAINS)
-    for i in range(len(DOMAINS)):
-        domain = DOMAINS[(start + i) % len(DOMAINS)]
-        handle = (DOMAIN_LOCKS / f"{domain}.lock").open("w")
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            handle.close()
-            continue
-        try:
-            yield domain
-        finally:
-            handle.close()
-        return
-    pytest.fail(f"every ROS 2 domain in {DOMAINS} is taken")
+    """A ROS_DOMAIN_ID no other test or bench on this machine uses while this one runs."""
+    try:
+        domain = claim_domain()
+    except Ros2Unavailable as e:
+        pytest.fail(str(e))
+    try:
+        yield domain.number
+    finally:
+        domain.release()

@@ -116,12 +116,23 @@ def main(argv: list[str] | None = None) -> int:
         )
         for topic in args.topics
     ]
+    if not measure(args, records, state, lock, malloc):
+        return 1
+    for subscriber in subscribers:
+        subscriber.unregister()
+    rospy.signal_shutdown("probe done")
+    return 0
+
+
+def measure(args: argparse.Namespace, records: dict, state: dict, lock: threading.Lock, malloc: str) -> bool:
+    """Wait for a first message on every topic, warm up, record for `args.duration` and write the result
+    (both flavours' probes); False when a topic stayed silent past `args.first_timeout`."""
     deadline = time.monotonic() + args.first_timeout
     while any(r.seen == 0 for r in records.values()):
         if time.monotonic() > deadline:
             silent = [t for t, r in records.items() if r.seen == 0]
             print(f"failed: no message on {', '.join(silent)}", flush=True)
-            return 1
+            return False
         time.sleep(0.05)
     time.sleep(args.warmup)
     with lock:
@@ -133,7 +144,6 @@ def main(argv: list[str] | None = None) -> int:
         state["recording"] = False
         seconds, (faults_end, cpu_end) = time.monotonic() - start, usage()
     print("done", flush=True)
-    result = {topic: summary(record, seconds) for topic, record in records.items()}
     write_result(
         args.out,
         {
@@ -141,13 +151,10 @@ def main(argv: list[str] | None = None) -> int:
             "probe_malloc": malloc,
             "probe_minor_faults": faults_end - faults,
             "probe_cpu_cores": (cpu_end - cpu_s) / seconds,
-            "topics": result,
+            "topics": {topic: summary(record, seconds) for topic, record in records.items()},
         },
     )
-    for subscriber in subscribers:
-        subscriber.unregister()
-    rospy.signal_shutdown("probe done")
-    return 0
+    return True
 
 
 if __name__ == "__main__":

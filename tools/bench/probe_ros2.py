@@ -24,9 +24,7 @@ from tools.bench.probe import (
     GLIBC_MALLOC,
     MALLOC_CHOICES,
     TopicRecord,
-    summary,
-    usage,
-    write_result,
+    measure,
 )
 from tools.bench.results import kind
 
@@ -92,33 +90,8 @@ def main(argv: list[str] | None = None) -> int:
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     threading.Thread(target=executor.spin, name="probe-executor", daemon=True).start()
-    deadline = time.monotonic() + args.first_timeout
-    while any(r.seen == 0 for r in records.values()):
-        if time.monotonic() > deadline:
-            silent = [t for t, r in records.items() if r.seen == 0]
-            print(f"failed: no message on {', '.join(silent)}", flush=True)
-            return 1
-        time.sleep(0.05)
-    time.sleep(args.warmup)
-    with lock:
-        state["recording"] = True
-        start, (faults, cpu_s) = time.monotonic(), usage()
-    print("measuring", flush=True)
-    time.sleep(args.duration)
-    with lock:
-        state["recording"] = False
-        seconds, (faults_end, cpu_end) = time.monotonic() - start, usage()
-    print("done", flush=True)
-    write_result(
-        args.out,
-        {
-            "seconds": seconds,
-            "probe_malloc": malloc,
-            "probe_minor_faults": faults_end - faults,
-            "probe_cpu_cores": (cpu_end - cpu_s) / seconds,
-            "topics": {topic: summary(record, seconds) for topic, record in records.items()},
-        },
-    )
+    if not measure(args, records, state, lock, malloc):
+        return 1
     executor.shutdown(timeout_sec=1.0)
     node.destroy_node()
     rclpy.try_shutdown()

@@ -16,8 +16,8 @@ from typing import TextIO
 ROOT = Path(__file__).resolve().parent.parent.parent
 ROS2_PYTHON = ROOT / ".venv-ros2" / "bin" / "python"
 ROS2_NODE = ROOT / ".venv-ros2" / "bin" / "airsim-mapper-node"  # the node as users start it
-DOMAIN_LOCKS = Path("/tmp/airsim-mapper-ros2-domains")  # shared with tests/ros2/conftest.py
-DOMAINS = range(1, 102)
+DOMAIN_LOCKS = Path("/tmp/airsim-mapper-ros2-domains")  # the bench's and tests/ros2's
+DOMAINS = range(1, 102)  # Fast DDS's ports fit domains 0-232; 0 is everyone's default
 
 
 class Ros2Unavailable(RuntimeError):
