@@ -75,9 +75,9 @@ def usage() -> tuple[int, float]:
     return own.ru_minflt, own.ru_utime + own.ru_stime
 
 
-def main(argv: list[str] | None = None) -> int:
-    import rospy
-
+def parse_arguments(argv: list[str] | None) -> tuple[argparse.Namespace, str]:
+    """Both flavours' probe arguments, and the malloc thresholds in effect: glibc's when asked, or when
+    tuning is off (AIRSIM_MAPPER_NO_TUNING)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("topics", nargs="+")
     parser.add_argument("--out", required=True)
@@ -85,9 +85,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=8.0)
     parser.add_argument("--first-timeout", type=float, default=60.0)
     parser.add_argument("--malloc", choices=MALLOC_CHOICES, default=DEFAULT_MALLOC)
-    args = parser.parse_args(rospy.myargv(argv)[1:] if argv is None else argv)
-    # what the thresholds are: glibc's when asked, or when tuning is off (AIRSIM_MAPPER_NO_TUNING)
+    args = parser.parse_args(argv)
     malloc = DEFAULT_MALLOC if args.malloc == DEFAULT_MALLOC and tuning.keep_frame_buffers() else GLIBC_MALLOC
+    return args, malloc
+
+
+def main(argv: list[str] | None = None) -> int:
+    import rospy
+
+    args, malloc = parse_arguments(rospy.myargv(argv)[1:] if argv is None else argv)
     rospy.init_node("bench_probe", anonymous=True, disable_signals=True)
     records = {topic: TopicRecord() for topic in args.topics}
     lock = threading.Lock()

@@ -12,19 +12,15 @@ fell behind counts every one. Its output, window and JSON result are probe.py's.
 
 from __future__ import annotations
 
-import argparse
 import struct
 import threading
 import time
 from typing import Any
 
-from airsim_mapper.common import tuning
 from tools.bench.probe import (
-    DEFAULT_MALLOC,
-    GLIBC_MALLOC,
-    MALLOC_CHOICES,
     TopicRecord,
     measure,
+    parse_arguments,
 )
 from tools.bench.results import kind
 
@@ -59,15 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("topics", nargs="+")
-    parser.add_argument("--out", required=True)
-    parser.add_argument("--warmup", type=float, default=2.0)
-    parser.add_argument("--duration", type=float, default=8.0)
-    parser.add_argument("--first-timeout", type=float, default=60.0)
-    parser.add_argument("--malloc", choices=MALLOC_CHOICES, default=DEFAULT_MALLOC)
-    args = parser.parse_args(argv)
-    malloc = DEFAULT_MALLOC if args.malloc == DEFAULT_MALLOC and tuning.keep_frame_buffers() else GLIBC_MALLOC
+    args, malloc = parse_arguments(argv)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = rclpy.create_node("bench_probe")
     records = {topic: TopicRecord() for topic in args.topics}
